@@ -1,0 +1,65 @@
+//! The shared vocabulary between the interface tracker and the fluid solver (DESIGN.md
+//! "Data that flows"): phase ids, regular grids, the phase field the tracker hands to the
+//! solver, and the velocity field the solver (or an analytic flow) hands to the tracker.
+//! Kept tiny on purpose so that `tracker` and `solver` never depend on each other.
+#![deny(unsafe_code)]
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// Index of a phase in the scene's phase list.
+pub type PhaseId = u16;
+
+/// Pseudo-phase on the far side of the domain boundary; closes the interface mesh there.
+pub const OUTSIDE: PhaseId = PhaseId::MAX;
+
+/// A regular grid of cubic cells: `dims` cells along each axis starting at `origin`.
+/// Nodes (cell corners) number `dims + 1` per axis; samples of a [`PhaseField`] sit at cell centres.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GridSpec {
+    pub origin: DVec3,
+    pub h: f64,
+    pub dims: [usize; 3],
+}
+
+impl GridSpec {
+    /// Number of cells.
+    pub fn cell_count(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    /// Linear index of cell (i, j, k), x fastest.
+    pub fn cell_index(&self, i: usize, j: usize, k: usize) -> usize {
+        i + self.dims[0] * (j + self.dims[1] * k)
+    }
+
+    /// Centre of cell (i, j, k).
+    pub fn cell_center(&self, i: usize, j: usize, k: usize) -> DVec3 {
+        self.origin + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * self.h
+    }
+
+    /// Position of node (i, j, k), the lower corner of cell (i, j, k).
+    pub fn node(&self, i: usize, j: usize, k: usize) -> DVec3 {
+        self.origin + DVec3::new(i as f64, j as f64, k as f64) * self.h
+    }
+
+    /// Upper corner of the domain the grid covers.
+    pub fn upper(&self) -> DVec3 {
+        self.origin + DVec3::new(self.dims[0] as f64, self.dims[1] as f64, self.dims[2] as f64) * self.h
+    }
+}
+
+/// Unsigned distance φ to the nearest interface and phase id χ at the cell centres of `grid`:
+/// everything the solver knows of the interfaces (DESIGN.md "PhaseField").
+#[derive(Clone, Debug)]
+pub struct PhaseField {
+    pub grid: GridSpec,
+    pub phi: Vec<f64>,
+    pub chi: Vec<PhaseId>,
+}
+
+/// Anything that gives a velocity (m/s) at a point and time: analytic test flows, or the
+/// solver's MAC grid when coupled. Trackers see only this.
+pub trait VelocityField: Sync {
+    fn velocity(&self, x: DVec3, t: f64) -> DVec3;
+}

@@ -1,0 +1,158 @@
+//! The scene file as written by users (TOML, serde). Every optional field has a default, and
+//! the resolved scene (defaults filled in) serialises back to the same format.
+
+use serde::{Deserialize, Serialize};
+
+/// A whole scene file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Short name, used for the default output folder.
+    pub name: String,
+    /// One line shown by `polyphase scenes`.
+    #[serde(default)]
+    pub description: String,
+    /// Which interface tracker runs the scene.
+    #[serde(default)]
+    pub tracker: TrackerKind,
+    /// Tracker cells along the longest domain axis.
+    pub resolution: i64,
+    pub domain: DomainSpec,
+    pub time: TimeSpec,
+    pub velocity: VelocitySpec,
+    /// Name of the phase that fills every point no shape covers.
+    pub background: String,
+    pub phases: Vec<PhaseSpec>,
+    /// Initial shapes, painted in order: a later shape overrides an earlier one where they overlap.
+    #[serde(default)]
+    pub shapes: Vec<ShapeSpec>,
+}
+
+/// The interface tracker a scene runs with (DESIGN.md "InterfaceTracker").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrackerKind {
+    /// Semi-Lagrangian contouring (paper 004).
+    #[default]
+    Contour,
+    /// Explicit front tracking (paper 000).
+    Front,
+}
+
+/// The simulation box.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DomainSpec {
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+    /// A 2D test run as a thin 3D slab: the z extent becomes exactly two cells.
+    #[serde(default)]
+    pub slab: bool,
+}
+
+/// Duration and output rate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// Simulated seconds.
+    pub end: f64,
+    /// Frames written after the initial one (frame 0 is the initial state).
+    pub frames: i64,
+    /// Largest tracker step as a multiple of h / (max speed): semi-Lagrangian steps are stable
+    /// for any value; smaller values mean more, more accurate steps.
+    #[serde(default = "default_cfl")]
+    pub cfl: f64,
+    /// The flow returns every shape to its start at `end` (volume and Hausdorff error reported).
+    #[serde(default)]
+    pub periodic: bool,
+}
+
+fn default_cfl() -> f64 {
+    2.0
+}
+
+/// An analytic velocity field for passive advection.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "field", rename_all = "snake_case", deny_unknown_fields)]
+pub enum VelocitySpec {
+    /// No motion.
+    Still,
+    /// Rigid rotation about the axis through `center` parallel to +z.
+    Rotation {
+        center: [f64; 3],
+        /// rad/s, counter-clockwise seen from +z.
+        angular_velocity: f64,
+    },
+    /// Enright et al. 2002 deformation field on the unit cube, reversing at half `period`.
+    Enright { period: f64 },
+    /// Single-vortex stretching field on the unit square (paper 004 Eq. 2), w = 0.
+    Vortex { period: f64 },
+}
+
+/// A phase: physical properties and render hints.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhaseSpec {
+    pub name: String,
+    /// kg/m³.
+    #[serde(default = "default_density")]
+    pub density: f64,
+    /// Dynamic viscosity, Pa·s.
+    #[serde(default = "default_viscosity")]
+    pub viscosity: f64,
+    /// Linear RGB in [0, 1], for rendering.
+    #[serde(default = "default_color")]
+    pub color: [f64; 3],
+    /// Index of refraction, for rendering.
+    #[serde(default = "default_ior")]
+    pub ior: f64,
+}
+
+fn default_density() -> f64 {
+    1000.0
+}
+fn default_viscosity() -> f64 {
+    1.0e-3
+}
+fn default_color() -> [f64; 3] {
+    [0.8, 0.8, 0.8]
+}
+fn default_ior() -> f64 {
+    1.33
+}
+
+/// One initial shape as written: `kind` selects which of the optional fields are required.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShapeSpec {
+    /// Phase name the shape is filled with.
+    pub phase: String,
+    /// `sphere` (center, radius), `cylinder` (center, radius; axis parallel to z), `box`
+    /// (lo, hi) or `half_space` (point, normal: the phase is on the side the normal points
+    /// away from).
+    pub kind: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lo: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hi: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal: Option<[f64; 3]>,
+    /// Half-spaces intersected with the shape (keep the side the normal points away from):
+    /// cuts a sphere into halves or wedges.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub clip: Vec<HalfSpaceSpec>,
+}
+
+/// A plane through `point`; the kept side is the one `normal` points away from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HalfSpaceSpec {
+    pub point: [f64; 3],
+    pub normal: [f64; 3],
+}

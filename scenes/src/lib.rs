@@ -1,0 +1,18 @@
+//! Scenes (DESIGN.md `scenes/`): the TOML format, validation with errors that name the
+//! problem and its place, initial shapes, analytic velocity fields and the built-in scenes.
+#![deny(unsafe_code)]
+
+pub mod builtin;
+pub mod error;
+pub mod format;
+pub mod scene;
+pub mod shapes;
+pub mod velocity;
+pub mod volume;
+
+pub use builtin::{builtin, load, BUILTIN, DEFAULT_SCENE};
+pub use error::SceneError;
+pub use format::{SceneFile, TrackerKind};
+pub use scene::Scene;
+pub use shapes::InitialPhases;
+pub use velocity::AnalyticVelocity;

@@ -1,0 +1,342 @@
+//! A validated scene: the resolved file plus everything derived from it (grid, shapes, flow).
+
+use glam::DVec3;
+use polyphase_grid::{GridSpec, PhaseId};
+
+use crate::error::SceneError;
+use crate::format::{HalfSpaceSpec, SceneFile, ShapeSpec, VelocitySpec};
+use crate::shapes::{InitialPhases, Primitive, Shape};
+use crate::velocity::AnalyticVelocity;
+
+/// Largest accepted tracker resolution: 4096³ nodes is beyond this machine's memory anyway.
+const MAX_RESOLUTION: i64 = 4096;
+
+/// A scene that passed validation.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The file with defaults filled in and the domain snapped to whole cells.
+    pub file: SceneFile,
+    /// The tracker's grid.
+    pub grid: GridSpec,
+    /// Initial phases.
+    pub initial: InitialPhases,
+    /// The advecting flow.
+    pub velocity: AnalyticVelocity,
+}
+
+impl Scene {
+    /// Parses and validates TOML text; `origin` (a path or `builtin:NAME`) prefixes every error.
+    pub fn parse(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+            origin: origin.to_string(),
+            message: one_line(&e.to_string()),
+        })?;
+        Scene::from_file(file, origin)
+    }
+
+    /// Validates a parsed file.
+    pub fn from_file(mut file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
+        let bad = |place: &str, message: String| SceneError::Invalid {
+            origin: origin.to_string(),
+            place: place.to_string(),
+            message,
+        };
+        if file.name.trim().is_empty() {
+            return Err(bad("name", "must not be empty".into()));
+        }
+        if !(4..=MAX_RESOLUTION).contains(&file.resolution) {
+            return Err(bad(
+                "resolution",
+                format!(
+                    "must be between 4 and {MAX_RESOLUTION} cells, got {}",
+                    file.resolution
+                ),
+            ));
+        }
+        check_vec(&file.domain.lo, "domain.lo", &bad)?;
+        check_vec(&file.domain.hi, "domain.hi", &bad)?;
+        for a in 0..3 {
+            if file.domain.hi[a] <= file.domain.lo[a] {
+                return Err(bad(
+                    "domain",
+                    format!("hi must exceed lo on every axis (axis {a})"),
+                ));
+            }
+        }
+        positive(file.time.end, "time.end", &bad)?;
+        positive(file.time.cfl, "time.cfl", &bad)?;
+        if file.time.frames < 1 {
+            return Err(bad(
+                "time.frames",
+                format!("must be at least 1, got {}", file.time.frames),
+            ));
+        }
+        let velocity = compile_velocity(&file.velocity, &bad)?;
+        let phases = compile_phases(&file, &bad)?;
+        let find = |name: &str, place: &str| -> Result<PhaseId, SceneError> {
+            phases
+                .iter()
+                .position(|p| p == name)
+                .map(|i| i as PhaseId)
+                .ok_or_else(|| {
+                    bad(
+                        place,
+                        format!("unknown phase '{name}' (phases: {})", phases.join(", ")),
+                    )
+                })
+        };
+        let background = find(&file.background, "background")?;
+        let shapes = file
+            .shapes
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let place = format!("shapes[{i}]");
+                Ok(Shape {
+                    phase: find(&s.phase, &format!("{place}.phase"))?,
+                    primitive: compile_primitive(s, &place, &bad)?,
+                    clip: compile_clip(&s.clip, &place, &bad)?,
+                })
+            })
+            .collect::<Result<Vec<_>, SceneError>>()?;
+        let grid = snap_grid(&mut file);
+        Ok(Scene {
+            file,
+            grid,
+            initial: InitialPhases { background, shapes },
+            velocity,
+        })
+    }
+
+    /// Re-validates with a different resolution and/or frame count (command-line overrides).
+    pub fn with_overrides(
+        &self,
+        resolution: Option<i64>,
+        frames: Option<i64>,
+    ) -> Result<Scene, SceneError> {
+        let mut file = self.file.clone();
+        if let Some(r) = resolution {
+            file.resolution = r;
+        }
+        if let Some(f) = frames {
+            file.time.frames = f;
+        }
+        Scene::from_file(file, "command line")
+    }
+
+    /// Phase names in id order.
+    pub fn phase_names(&self) -> Vec<String> {
+        self.file.phases.iter().map(|p| p.name.clone()).collect()
+    }
+
+    /// The resolved scene as TOML (every default filled in).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(&self.file).unwrap_or_default()
+    }
+
+    /// Seconds between frames.
+    pub fn frame_dt(&self) -> f64 {
+        self.file.time.end / self.file.time.frames as f64
+    }
+
+    /// Tracker steps per frame: enough that no step moves a point more than `cfl` cells.
+    pub fn steps_per_frame(&self) -> usize {
+        let vmax = self.velocity.max_speed(self.grid.origin, self.grid.upper());
+        let dt_max = self.file.time.cfl * self.grid.h / vmax.max(1e-300);
+        (self.frame_dt() / dt_max).ceil().max(1.0) as usize
+    }
+}
+
+/// Snaps the domain to whole cells of size h = longest extent / resolution (a slab gets
+/// exactly two cells in z) and writes the snapped box back into the file.
+fn snap_grid(file: &mut SceneFile) -> GridSpec {
+    let lo = DVec3::from_array(file.domain.lo);
+    let ext = DVec3::from_array(file.domain.hi) - lo;
+    let longest = if file.domain.slab {
+        ext.x.max(ext.y)
+    } else {
+        ext.max_element()
+    };
+    let h = longest / file.resolution as f64;
+    let mut dims = [0usize; 3];
+    for (a, d) in dims.iter_mut().enumerate() {
+        *d = ((ext[a] / h).round() as usize).max(1);
+    }
+    if file.domain.slab {
+        dims[2] = 2;
+    }
+    let grid = GridSpec {
+        origin: lo,
+        h,
+        dims,
+    };
+    file.domain.hi = grid.upper().to_array();
+    grid
+}
+
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+type Bad<'a> = dyn Fn(&str, String) -> SceneError + 'a;
+
+fn finite(v: f64, place: &str, bad: &Bad) -> Result<f64, SceneError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(bad(place, format!("must be a finite number, got {v}")))
+    }
+}
+
+fn positive(v: f64, place: &str, bad: &Bad) -> Result<f64, SceneError> {
+    if finite(v, place, bad)? > 0.0 {
+        Ok(v)
+    } else {
+        Err(bad(place, format!("must be positive, got {v}")))
+    }
+}
+
+fn check_vec(v: &[f64; 3], place: &str, bad: &Bad) -> Result<DVec3, SceneError> {
+    for (i, &c) in v.iter().enumerate() {
+        finite(c, &format!("{place}[{i}]"), bad)?;
+    }
+    Ok(DVec3::from_array(*v))
+}
+
+fn unit(v: &[f64; 3], place: &str, bad: &Bad) -> Result<DVec3, SceneError> {
+    let n = check_vec(v, place, bad)?;
+    if n.length() > 0.0 {
+        Ok(n.normalize())
+    } else {
+        Err(bad(place, "must not be the zero vector".into()))
+    }
+}
+
+fn compile_velocity(v: &VelocitySpec, bad: &Bad) -> Result<AnalyticVelocity, SceneError> {
+    Ok(match v {
+        VelocitySpec::Still => AnalyticVelocity::Still,
+        VelocitySpec::Rotation {
+            center,
+            angular_velocity,
+        } => AnalyticVelocity::Rotation {
+            center: check_vec(center, "velocity.center", bad)?,
+            omega: finite(*angular_velocity, "velocity.angular_velocity", bad)?,
+        },
+        VelocitySpec::Enright { period } => AnalyticVelocity::Enright {
+            period: positive(*period, "velocity.period", bad)?,
+        },
+        VelocitySpec::Vortex { period } => AnalyticVelocity::Vortex {
+            period: positive(*period, "velocity.period", bad)?,
+        },
+    })
+}
+
+fn compile_phases(file: &SceneFile, bad: &Bad) -> Result<Vec<String>, SceneError> {
+    if file.phases.is_empty() {
+        return Err(bad("phases", "at least one phase is required".into()));
+    }
+    if file.phases.len() >= PhaseId::MAX as usize {
+        return Err(bad(
+            "phases",
+            format!("at most {} phases", PhaseId::MAX - 1),
+        ));
+    }
+    let mut names: Vec<String> = Vec::with_capacity(file.phases.len());
+    for (i, p) in file.phases.iter().enumerate() {
+        let place = |f: &str| format!("phases[{i}].{f}");
+        if p.name.trim().is_empty() {
+            return Err(bad(&place("name"), "must not be empty".into()));
+        }
+        if names.contains(&p.name) {
+            return Err(bad(
+                &place("name"),
+                format!("phase '{}' is defined twice", p.name),
+            ));
+        }
+        positive(p.density, &place("density"), bad)?;
+        if finite(p.viscosity, &place("viscosity"), bad)? < 0.0 {
+            return Err(bad(
+                &place("viscosity"),
+                format!("must not be negative, got {}", p.viscosity),
+            ));
+        }
+        for (c, &v) in p.color.iter().enumerate() {
+            if !(0.0..=1.0).contains(&finite(v, &place(&format!("color[{c}]")), bad)?) {
+                return Err(bad(
+                    &place(&format!("color[{c}]")),
+                    format!("must be in [0, 1], got {v}"),
+                ));
+            }
+        }
+        if finite(p.ior, &place("ior"), bad)? < 1.0 {
+            return Err(bad(
+                &place("ior"),
+                format!("must be at least 1, got {}", p.ior),
+            ));
+        }
+        names.push(p.name.clone());
+    }
+    Ok(names)
+}
+
+fn compile_primitive(s: &ShapeSpec, place: &str, bad: &Bad) -> Result<Primitive, SceneError> {
+    let need3 = |v: Option<[f64; 3]>, field: &str| -> Result<[f64; 3], SceneError> {
+        v.ok_or_else(|| {
+            bad(
+                place,
+                format!("kind '{}' needs the field '{field}'", s.kind),
+            )
+        })
+    };
+    let radius = || -> Result<f64, SceneError> {
+        let r = s.radius.ok_or_else(|| {
+            bad(place, format!("kind '{}' needs the field 'radius'", s.kind))
+        })?;
+        positive(r, &format!("{place}.radius"), bad)
+    };
+    Ok(match s.kind.as_str() {
+        "sphere" => Primitive::Sphere {
+            center: check_vec(&need3(s.center, "center")?, &format!("{place}.center"), bad)?,
+            radius: radius()?,
+        },
+        "cylinder" => Primitive::Cylinder {
+            center: check_vec(&need3(s.center, "center")?, &format!("{place}.center"), bad)?,
+            radius: radius()?,
+        },
+        "box" => {
+            let lo = check_vec(&need3(s.lo, "lo")?, &format!("{place}.lo"), bad)?;
+            let hi = check_vec(&need3(s.hi, "hi")?, &format!("{place}.hi"), bad)?;
+            if hi.cmple(lo).any() {
+                return Err(bad(place, "box hi must exceed lo on every axis".into()));
+            }
+            Primitive::Box { lo, hi }
+        }
+        "half_space" => Primitive::HalfSpace {
+            point: check_vec(&need3(s.point, "point")?, &format!("{place}.point"), bad)?,
+            normal: unit(&need3(s.normal, "normal")?, &format!("{place}.normal"), bad)?,
+        },
+        other => {
+            return Err(bad(
+                &format!("{place}.kind"),
+                format!("unknown shape kind '{other}' (sphere, cylinder, box, half_space)"),
+            ))
+        }
+    })
+}
+
+fn compile_clip(
+    clip: &[HalfSpaceSpec],
+    place: &str,
+    bad: &Bad,
+) -> Result<Vec<(DVec3, DVec3)>, SceneError> {
+    clip.iter()
+        .enumerate()
+        .map(|(i, h)| {
+            let p = format!("{place}.clip[{i}]");
+            Ok((
+                check_vec(&h.point, &format!("{p}.point"), bad)?,
+                unit(&h.normal, &format!("{p}.normal"), bad)?,
+            ))
+        })
+        .collect()
+}

@@ -1,0 +1,33 @@
+//! MAC-grid incompressible multiphase solver (DESIGN.md "The solver"): semi-Lagrangian /
+//! MacCormack advection, gravity and body forces, implicit variable viscosity in full stress
+//! form, and a variable-density pressure projection with ghost-fluid face densities, on a
+//! staggered grid with free-slip / no-slip / periodic boundaries and static solids. Linear
+//! systems are solved by CG with MIC(0) or geometric-multigrid preconditioning, in parallel and
+//! bit-deterministically.
+#![deny(unsafe_code)]
+#![warn(missing_docs)]
+
+mod advect;
+pub mod bench;
+mod config;
+mod error;
+mod interp;
+mod layout;
+mod linalg;
+mod mac;
+mod phase;
+mod pressure;
+mod solid;
+mod solver;
+mod viscosity;
+
+pub use config::{
+    AdvectionScheme, AxisBoundary, Interpolation, LinearSolverSettings, PreconditionerKind,
+    SolverConfig, Wall,
+};
+pub use error::SolverError;
+pub use linalg::pcg::SolveStats;
+pub use mac::MacGrid;
+pub use phase::PhaseProps;
+pub use solid::{SignedDistance, Solid};
+pub use solver::{BodyForce, Solver, StepReport, StepTimings};

@@ -1,0 +1,148 @@
+//! `polyphase bench`: stage timings and accuracy in tables shaped like the papers'.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Subcommand;
+use glam::DVec3;
+use polyphase_tracker::{ContourTracker, InterfaceTracker};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// What to benchmark.
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// First step of the contouring tracker (paper 004 Tables 1 and 2).
+    Contour {
+        /// Built-in scene name or scene file.
+        #[arg(long, default_value = "zalesak")]
+        scene: String,
+        /// Resolutions, comma separated.
+        #[arg(long, value_delimiter = ',', default_value = "32,64,128")]
+        res: Vec<i64>,
+        /// Random points for the indicator accuracy (paper: 10⁷; default 10⁶).
+        #[arg(long, default_value_t = 1_000_000)]
+        samples: usize,
+        /// Also write the rows as a JSON array to this file.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+}
+
+/// One row of the contour benchmark.
+#[derive(Serialize)]
+struct ContourRow {
+    res: i64,
+    cells: usize,
+    interface_cells: usize,
+    vertices: usize,
+    build_s: f64,
+    contour_s: f64,
+    redistance_s: f64,
+    total_s: f64,
+    indicator_accuracy: f64,
+    max_mismatch_over_h: f64,
+}
+
+pub fn bench(cmd: BenchCommand) -> Result<()> {
+    match cmd {
+        BenchCommand::Contour {
+            scene,
+            res,
+            samples,
+            json,
+        } => {
+            let base = polyphase_scenes::load(&scene)?;
+            let mut rows = Vec::new();
+            for r in res {
+                let s = base.with_overrides(Some(r), None)?;
+                rows.push(contour_row(&s, samples));
+                eprintln!("{}", contour_table(&rows));
+            }
+            println!("{}", contour_table(&rows));
+            if let Some(path) = json {
+                std::fs::write(&path, serde_json::to_string_pretty(&rows)?)
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+            }
+            Ok(())
+        }
+    }
+}
+
+fn contour_row(scene: &polyphase_scenes::Scene, samples: usize) -> ContourRow {
+    let n_phases = scene.file.phases.len();
+    let exact = |x| scene.initial.sample(x);
+    let (tracker, stats) =
+        ContourTracker::new(scene.grid, &exact, n_phases, scene.initial.background);
+    let stage = |name: &str| {
+        stats
+            .stages
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map_or(0.0, |s| s.1)
+    };
+    let (lo, hi) = (scene.grid.origin, scene.grid.upper());
+    let h = scene.grid.h;
+    let mismatches: Vec<f64> = (0..samples)
+        .into_par_iter()
+        .filter_map(|i| {
+            let x = lo + (hi - lo) * random_unit(i as u64);
+            let (_, chi) = tracker.phi_chi(x);
+            (chi != scene.initial.phase(x)).then(|| tracker.query().distance(x) / h)
+        })
+        .collect();
+    let (b, c, d) = (stage("build"), stage("contour"), stage("redistance"));
+    ContourRow {
+        res: scene.file.resolution,
+        cells: stats.cells,
+        interface_cells: stats.interface_cells,
+        vertices: tracker.mesh().vertices.len(),
+        build_s: b,
+        contour_s: c,
+        redistance_s: d,
+        total_s: b + c + d,
+        indicator_accuracy: 1.0 - mismatches.len() as f64 / samples.max(1) as f64,
+        max_mismatch_over_h: mismatches.iter().copied().fold(0.0, f64::max),
+    }
+}
+
+/// A deterministic point in the unit cube (SplitMix64 of the index).
+fn random_unit(i: u64) -> DVec3 {
+    let mut z = i.wrapping_mul(3).wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut next = || {
+        z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut x = z;
+        x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((x ^ (x >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    DVec3::new(next(), next(), next())
+}
+
+fn contour_table(rows: &[ContourRow]) -> String {
+    let mut s = String::new();
+    let line = |s: &mut String, label: &str, f: &dyn Fn(&ContourRow) -> String| {
+        let _ = write!(s, "{label:<22}");
+        for r in rows {
+            let _ = write!(s, "{:>12}", f(r));
+        }
+        s.push('\n');
+    };
+    line(&mut s, "Res (n^3)", &|r| format!("{}^3", r.res));
+    line(&mut s, "Cells", &|r| r.cells.to_string());
+    line(&mut s, "Intersect cells", &|r| r.interface_cells.to_string());
+    line(&mut s, "N / N_T", &|r| {
+        format!("{:.3}", r.interface_cells as f64 / r.cells.max(1) as f64)
+    });
+    line(&mut s, "Vertices", &|r| r.vertices.to_string());
+    line(&mut s, "Building tree (s)", &|r| format!("{:.4}", r.build_s));
+    line(&mut s, "Contouring (s)", &|r| format!("{:.4}", r.contour_s));
+    line(&mut s, "Redistancing (s)", &|r| format!("{:.4}", r.redistance_s));
+    line(&mut s, "Total (s)", &|r| format!("{:.4}", r.total_s));
+    line(&mut s, "Indicator accuracy", &|r| {
+        format!("{:.4}%", r.indicator_accuracy * 100.0)
+    });
+    line(&mut s, "max |phi_e / h|", &|r| format!("{:.2}", r.max_mismatch_over_h));
+    s
+}

@@ -1,0 +1,109 @@
+//! The end-of-run summary: one table on the terminal and the same figures in `stats.jsonl`.
+
+use std::fmt::Write;
+
+use polyphase_tracker::{LabeledMesh, StepStats};
+use serde_json::{json, Value};
+
+/// Totals gathered over a run.
+pub struct Summary {
+    names: Vec<String>,
+    stages: Vec<(&'static str, f64)>,
+    frames: usize,
+    steps: usize,
+    wall: f64,
+    drift: Vec<f64>,
+    vertices: usize,
+    triangles: usize,
+}
+
+impl Summary {
+    pub fn new(names: &[String]) -> Summary {
+        Summary {
+            names: names.to_vec(),
+            stages: Vec::new(),
+            frames: 0,
+            steps: 0,
+            wall: 0.0,
+            drift: Vec::new(),
+            vertices: 0,
+            triangles: 0,
+        }
+    }
+
+    /// Adds one step's stage timings.
+    pub fn add_step(&mut self, step: &StepStats) {
+        for &(name, secs) in &step.stages {
+            match self.stages.iter_mut().find(|(n, _)| *n == name) {
+                Some(entry) => entry.1 += secs,
+                None => self.stages.push((name, secs)),
+            }
+        }
+    }
+
+    /// Records the final state: relative volume drift against the reference volumes.
+    pub fn finish(
+        &mut self,
+        frames: usize,
+        steps: usize,
+        wall: f64,
+        reference: &[f64],
+        volumes: &[f64],
+        mesh: &LabeledMesh,
+    ) {
+        self.frames = frames;
+        self.steps = steps;
+        self.wall = wall;
+        self.drift = volumes
+            .iter()
+            .zip(reference)
+            .map(|(v, r)| if *r > 0.0 { (v - r) / r } else { 0.0 })
+            .collect();
+        self.vertices = mesh.vertices.len();
+        self.triangles = mesh.triangles.len();
+    }
+
+    /// The terminal table.
+    pub fn table(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "frames {}  steps {}  wall {:.2} s  final mesh {} vertices, {} triangles",
+            self.frames, self.steps, self.wall, self.vertices, self.triangles
+        );
+        let _ = writeln!(s, "{:<16} {:>10}", "stage", "seconds");
+        for (name, secs) in &self.stages {
+            let _ = writeln!(s, "{name:<16} {secs:>10.3}");
+        }
+        let _ = writeln!(s, "{:<16} {:>10}", "phase", "vol drift");
+        for (name, d) in self.names.iter().zip(&self.drift) {
+            let _ = writeln!(s, "{name:<16} {:>9.4}%", d * 100.0);
+        }
+        s
+    }
+
+    /// The same figures as one JSON line.
+    pub fn json(&self) -> Value {
+        let stages: serde_json::Map<String, Value> = self
+            .stages
+            .iter()
+            .map(|(n, t)| (n.to_string(), json!(t)))
+            .collect();
+        let drift: serde_json::Map<String, Value> = self
+            .names
+            .iter()
+            .zip(&self.drift)
+            .map(|(n, d)| (n.clone(), json!(d)))
+            .collect();
+        json!({
+            "summary": {
+                "frames": self.frames,
+                "steps": self.steps,
+                "wall_s": self.wall,
+                "stage_s": stages,
+                "volume_drift": drift,
+                "mesh": { "vertices": self.vertices, "triangles": self.triangles },
+            }
+        })
+    }
+}

@@ -1,0 +1,20 @@
+//! Helpers shared by the end-to-end tests: run the binary, make scratch folders.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs the `polyphase` binary with `args`.
+pub fn polyphase(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_polyphase"))
+        .args(args)
+        .output()
+        .expect("the polyphase binary runs")
+}
+
+/// A fresh, empty scratch folder under the target directory, unique per test name.
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}

@@ -1,0 +1,104 @@
+//! Closing the contour at the domain boundary: every leaf face on the grid box gets
+//! triangles labelled `[OUTSIDE, phase]`, facing out of the domain.
+//!
+//! Interface cells are handled with the stencils (their boundary tet faces are split by
+//! label, sharing edge and triple-point vertices with the interior). Here: leaves with one
+//! phase. A leaf face with only its 4 corners on its perimeter becomes 2 triangles along the
+//! min→max diagonal; a coarse leaf face whose edges carry hanging nodes (corners of smaller
+//! neighbouring leaf faces) becomes a fan around a new centre vertex through every such node,
+//! so the closure is conforming (no T-junctions) with O(perimeter) triangles per leaf face.
+
+use glam::DVec3;
+use polyphase_grid::OUTSIDE;
+use rayon::prelude::*;
+
+use super::stencils::{Poly, VKey};
+use super::tree::{MdTree, LEAF};
+
+impl MdTree {
+    /// Lattice ids of all leaf corners on the domain boundary, sorted.
+    fn boundary_corners(&self) -> Vec<u64> {
+        let lat = self.lattice;
+        let mut ids: Vec<u64> = self
+            .cells
+            .par_iter()
+            .filter(|c| c.child == LEAF)
+            .flat_map_iter(|c| {
+                (0..8)
+                    .map(move |k| c.corner(k))
+                    .filter(|p| lat.on_boundary(*p))
+                    .map(move |p| lat.id(p))
+            })
+            .collect();
+        ids.par_sort_unstable();
+        ids.dedup();
+        ids
+    }
+
+    /// Boundary polygons of the single-phase leaves, in cell order.
+    pub(crate) fn closure_polys(&self) -> Vec<Poly> {
+        let corners = self.boundary_corners();
+        let lat = self.lattice;
+        self.cells
+            .par_iter()
+            .enumerate()
+            .filter(|(_, c)| c.child == LEAF && !c.mixed)
+            .flat_map_iter(|(ci, cell)| {
+                let mut out = Vec::new();
+                for axis in 0..3 {
+                    for side in 0..2u64 {
+                        let coord = cell.min[axis] + side * cell.size;
+                        if coord != side * lat.dims[axis] {
+                            continue;
+                        }
+                        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                        let mut ring = Vec::with_capacity(4);
+                        let mut p = cell.min;
+                        p[axis] = coord;
+                        // Walk the perimeter: +u, +v, −u, −v.
+                        for (dir, sign) in [(u, 1i64), (v, 1), (u, -1), (v, -1)] {
+                            for step in 0..cell.size {
+                                if step == 0 || corners.binary_search(&lat.id(p)).is_ok() {
+                                    ring.push(lat.id(p));
+                                }
+                                p[dir] = (p[dir] as i64 + sign) as u64;
+                            }
+                        }
+                        // The ring turns e_u → e_v, so its normal is e_u × e_v = e_axis.
+                        let flip = side == 0;
+                        let labels = [OUTSIDE, cell.chi];
+                        let tri = |a: VKey, b: VKey, c: VKey| Poly {
+                            verts: if flip { [a, c, b, c] } else { [a, b, c, c] },
+                            len: 3,
+                            labels,
+                            fixed_diagonal: false,
+                        };
+                        if ring.len() == 4 {
+                            let r = [0, 1, 2, 3].map(|i| VKey::Node(ring[i]));
+                            out.push(tri(r[0], r[1], r[2]));
+                            out.push(tri(r[0], r[2], r[3]));
+                        } else {
+                            let centre = VKey::Centre(ci as u32, (axis * 2) as u8 + side as u8);
+                            for i in 0..ring.len() {
+                                let (a, b) = (ring[i], ring[(i + 1) % ring.len()]);
+                                out.push(tri(centre, VKey::Node(a), VKey::Node(b)));
+                            }
+                        }
+                    }
+                }
+                out
+            })
+            .collect()
+    }
+
+    /// Position of the centre of face `face` (axis·2 + side) of leaf `cell`.
+    pub(crate) fn face_centre(&self, cell: u32, face: u8) -> DVec3 {
+        let c = self.cells[cell as usize];
+        let (axis, side) = ((face / 2) as usize, (face % 2) as u64);
+        let s = c.size as f64;
+        let mut p =
+            DVec3::new(c.min[0] as f64, c.min[1] as f64, c.min[2] as f64) + DVec3::splat(0.5 * s);
+        p[axis] = (c.min[axis] + side * c.size) as f64;
+        self.lattice.origin + p * self.lattice.h
+    }
+}

@@ -1,0 +1,133 @@
+//! Contouring the MD tree (paper 004 §5, §6.3): stencils on the interface cells, boundary
+//! closure, shared vertices, and the final labelled mesh.
+//!
+//! Determinism: polygons are generated per interface cell in sorted cell order (then the
+//! closure in cell order), vertex keys are sorted and deduplicated before any position is
+//! computed, and each position is a function of its key alone (nodes in sorted order), so
+//! vertex ids, positions and triangle order do not depend on the thread count.
+
+use glam::DVec3;
+use polyphase_grid::PhaseId;
+use rayon::prelude::*;
+
+use super::bisect::{edge_crossing, junction, triple_point};
+use super::sampler::PhaseSampler;
+use super::stencils::{corner_offset, Poly, Simplex, VKey, KUHN};
+use super::tree::MdTree;
+use crate::mesh::LabeledMesh;
+
+impl MdTree {
+    /// Multiphase marching tetrahedra with bisection on exact φ, χ, watertight, closed at the
+    /// domain boundary (boundary faces are labelled `[OUTSIDE, phase]` and face outward).
+    pub fn contour(&self, sampler: &dyn PhaseSampler) -> LabeledMesh {
+        let mut polys: Vec<Poly> = self
+            .interface
+            .par_iter()
+            .flat_map_iter(|&c| self.cell_polys(c))
+            .collect();
+        polys.extend(self.closure_polys());
+        let mut keys: Vec<VKey> = polys
+            .par_iter()
+            .flat_map_iter(|p| p.verts[..p.len as usize].to_vec())
+            .collect();
+        keys.par_sort_unstable();
+        keys.dedup();
+        let vertices: Vec<DVec3> = keys
+            .par_iter()
+            .map(|&k| self.vertex_position(k, sampler))
+            .collect();
+        let id = |k: &VKey| keys.binary_search(k).map_or(0, |i| i as u32);
+        let tris: Vec<([u32; 3], [PhaseId; 2])> = polys
+            .par_iter()
+            .flat_map_iter(|p| {
+                let v = p.verts.map(|k| id(&k));
+                let mut out = Vec::with_capacity(2);
+                if p.len == 3 {
+                    out.push(([v[0], v[1], v[2]], p.labels));
+                } else {
+                    let pos = v.map(|i| vertices[i as usize]);
+                    let along_02 = p.fixed_diagonal
+                        || pos[0].distance_squared(pos[2]) <= pos[1].distance_squared(pos[3]);
+                    if along_02 {
+                        out.push(([v[0], v[1], v[2]], p.labels));
+                        out.push(([v[0], v[2], v[3]], p.labels));
+                    } else {
+                        out.push(([v[0], v[1], v[3]], p.labels));
+                        out.push(([v[1], v[2], v[3]], p.labels));
+                    }
+                }
+                out
+            })
+            .collect();
+        let (triangles, labels) = tris.into_iter().unzip();
+        LabeledMesh {
+            vertices,
+            triangles,
+            labels,
+        }
+    }
+
+    /// Stencil polygons of interface cell `c`: its 6 tets, and its tet faces on the boundary.
+    fn cell_polys(&self, c: u32) -> Vec<Poly> {
+        let lat = self.lattice;
+        let cell = self.cells[c as usize];
+        let nodes: [u64; 8] = std::array::from_fn(|k| lat.id(cell.corner(k)));
+        let labels = cell.slots.map(|s| self.nodes.chi[s as usize]);
+        let mut out = Vec::new();
+        for (t, tet) in KUHN.iter().enumerate() {
+            Simplex {
+                nodes: tet.map(|k| nodes[k]),
+                local: tet.map(corner_offset),
+                labels: tet.map(|k| labels[k]),
+                tet_key: VKey::Tet(c, t as u8),
+            }
+            .tet_stencil(&mut out);
+        }
+        for axis in 0..3 {
+            for side in 0..2u64 {
+                if cell.min[axis] + side != side * lat.dims[axis] {
+                    continue;
+                }
+                let (u, v) = (1 << ((axis + 1) % 3), 1 << ((axis + 2) % 3));
+                let lo = (side as usize) << axis;
+                let mut outward = DVec3::ZERO;
+                outward[axis] = if side == 0 { -1.0 } else { 1.0 };
+                for mid in [lo | u, lo | v] {
+                    let face = [lo, mid, lo | u | v, lo];
+                    Simplex {
+                        nodes: face.map(|k| nodes[k]),
+                        local: face.map(corner_offset),
+                        labels: face.map(|k| labels[k]),
+                        tet_key: VKey::Tet(c, 0),
+                    }
+                    .boundary_face(outward, &mut out);
+                }
+            }
+        }
+        out
+    }
+
+    /// The position of a vertex key (computed once per key, from the key alone).
+    fn vertex_position(&self, k: VKey, sampler: &dyn PhaseSampler) -> DVec3 {
+        let lat = &self.lattice;
+        let val = |n: u64| self.nodes.value(n).unwrap_or((0.0, 0));
+        match k {
+            VKey::Node(n) => lat.pos(n),
+            VKey::Edge(a, b) => {
+                edge_crossing(sampler, lat.pos(a), lat.pos(b), val(a), val(b), lat.h)
+            }
+            VKey::Face(a, b, c) => triple_point(
+                sampler,
+                [a, b, c].map(|n| lat.pos(n)),
+                [a, b, c].map(val),
+                lat.h,
+            ),
+            VKey::Tet(c, t) => {
+                let cell = self.cells[c as usize];
+                let ids = KUHN[t as usize].map(|k| lat.id(cell.corner(k)));
+                junction(sampler, ids.map(|n| lat.pos(n)), ids.map(val), lat.h)
+            }
+            VKey::Centre(c, f) => self.face_centre(c, f),
+        }
+    }
+}

@@ -1,0 +1,37 @@
+//! The semi-Lagrangian contouring tracker's spatial part (paper 004 §5–§6): the adaptive
+//! multiphase distance (MD) tree, multiphase marching tetrahedra with bisection, and the
+//! closure of the mesh at the domain boundary. Redistancing lives in `crate::redistance`.
+//!
+//! One step: [`MdTree::build`] with a [`PhaseSampler`] (backtrace + exact mesh query),
+//! [`MdTree::contour`] with the same sampler, then `MdTree::redistance` with the exact
+//! distance to the new mesh; [`MdTree::sample`] then serves φ, χ away from the interface.
+//!
+//! Decisions (details in each file):
+//! - `nodes`: φ, χ live in one open-addressing table keyed by the linear lattice node id
+//!   (every sampled point, centres included, is a lattice node); cells keep their corners'
+//!   slots, so only the build hashes.
+//! - `tree`: a forest of root blocks (largest power of two ≤ 16 dividing all dims), refined
+//!   level by level with the §6.2 rule; each level's new points are deduplicated, sorted and
+//!   evaluated in parallel. A conformity pass protects watertightness when φ over-estimates.
+//! - `stencils`: Kuhn 6-tet split of every cube; the Fig. 5 stencils, oriented from nominal
+//!   positions so the mesh is closed and label-consistent by construction.
+//! - `bisect`: edge crossings by safeguarded regula falsi on brackets tightened with φ; triple
+//!   points by intersecting interface lines (the paper's corner-replacement iteration is the
+//!   fallback, and gives the quadruple points).
+//! - `closure`: the domain boundary, conforming to hanging nodes of coarse leaves.
+//! - `extract`: keys sorted before positions are computed, so the output is identical for any
+//!   thread count.
+
+mod bisect;
+mod closure;
+mod extract;
+pub(crate) mod nodes;
+mod sampler;
+mod stencils;
+pub(crate) mod tree;
+
+#[cfg(test)]
+mod tests;
+
+pub use sampler::PhaseSampler;
+pub use tree::MdTree;

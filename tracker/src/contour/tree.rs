@@ -1,0 +1,343 @@
+//! The multiphase distance (MD) tree: a forest of octrees over root blocks, built top-down
+//! with the split rule of paper 004 §6.2, and point queries on it (§6.1).
+
+use glam::DVec3;
+use polyphase_grid::{GridSpec, PhaseId};
+use rayon::prelude::*;
+
+use super::nodes::{Lattice, NodeMap};
+use super::sampler::PhaseSampler;
+
+/// `child` of a leaf.
+pub(crate) const LEAF: u32 = u32::MAX;
+
+/// Largest root block edge (in cells); see [`block_size`].
+const MAX_BLOCK: u64 = 16;
+
+/// Split factor of §6.2: split a cell of edge `h_c` when φ(centre) < `SPLIT_FACTOR`·h_c.
+const SPLIT_FACTOR: f64 = 3.0;
+
+/// One cell of the forest: a cube of `size` unit cells with lower corner `min` (in cells).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Cell {
+    pub min: [u64; 3],
+    pub size: u64,
+    /// Index of the first of 8 children (octant order x + 2y + 4z), or [`LEAF`].
+    pub child: u32,
+    /// The corners' phase when they all agree.
+    pub chi: PhaseId,
+    /// The corners' phases differ (only possible for unit leaves once built).
+    pub mixed: bool,
+    /// Node-store slots of the 8 corners (set once the cell's level is sampled).
+    pub slots: [u32; 8],
+}
+
+impl Cell {
+    /// Lattice coordinates of corner `c` (bits x + 2y + 4z) of this cell.
+    #[inline]
+    pub fn corner(&self, c: usize) -> [u64; 3] {
+        let s = self.size;
+        [
+            self.min[0] + s * (c as u64 & 1),
+            self.min[1] + s * ((c as u64 >> 1) & 1),
+            self.min[2] + s * ((c as u64 >> 2) & 1),
+        ]
+    }
+}
+
+/// Adaptive multiphase distance tree of paper 004 §6: φ and χ sampled at cell corners (and
+/// centres of cells of size ≥ 2), refined to unit cells wherever the interface may pass.
+///
+/// The forest's roots are blocks of edge B = the largest power of two ≤ 16 dividing every
+/// `dims[a]`, so any grid (even a 256×256×2 slab, B = 2) is tiled exactly.
+#[derive(Clone, Debug)]
+pub struct MdTree {
+    pub(crate) lattice: Lattice,
+    pub(crate) block: u64,
+    pub(crate) roots: [u64; 3],
+    pub(crate) cells: Vec<Cell>,
+    /// φ, χ as sampled while building (φ drives the contour's bisection brackets).
+    pub(crate) nodes: NodeMap,
+    /// φ per node slot as [`MdTree::sample`] interpolates it (replaced by `redistance`).
+    pub(crate) dist: Vec<f64>,
+    /// Unit leaves whose corners' χ differ, sorted by lattice id of their lower corner.
+    pub(crate) interface: Vec<u32>,
+}
+
+/// Largest power of two ≤ 16 dividing all of `dims` (all positive).
+fn block_size(dims: [u64; 3]) -> u64 {
+    let mut b = MAX_BLOCK;
+    while b > 1 && dims.iter().any(|d| d % b != 0) {
+        b /= 2;
+    }
+    b
+}
+
+impl MdTree {
+    /// Top-down build (§6.2): split a cell if φ(centre) < 3·h_cell or its corner χ differ;
+    /// only the finest level meets the interface. New values are evaluated once per node,
+    /// level by level, in parallel over a sorted, deduplicated list of the points that level
+    /// needs.
+    pub fn build(grid: &GridSpec, sampler: &dyn PhaseSampler) -> MdTree {
+        let lattice = Lattice::new(grid);
+        let mut tree = MdTree {
+            lattice,
+            block: 1,
+            roots: [0; 3],
+            cells: Vec::new(),
+            nodes: NodeMap::default(),
+            dist: Vec::new(),
+            interface: Vec::new(),
+        };
+        if lattice.dims.contains(&0) {
+            return tree;
+        }
+        let b = block_size(lattice.dims);
+        tree.block = b;
+        tree.roots = lattice.dims.map(|d| d / b);
+        for k in 0..tree.roots[2] {
+            for j in 0..tree.roots[1] {
+                for i in 0..tree.roots[0] {
+                    tree.cells.push(Cell {
+                        min: [i * b, j * b, k * b],
+                        size: b,
+                        child: LEAF,
+                        chi: 0,
+                        mixed: false,
+                        slots: [0; 8],
+                    });
+                }
+            }
+        }
+        tree.refine_from((0..tree.cells.len() as u32).collect(), sampler);
+        tree.conform(sampler);
+        let mut interface: Vec<(u64, u32)> = tree
+            .cells
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.mixed && c.child == LEAF)
+            .map(|(i, c)| (lattice.id(c.min), i as u32))
+            .collect();
+        interface.sort_unstable();
+        tree.interface = interface.into_iter().map(|(_, i)| i).collect();
+        tree.dist = tree.nodes.phi.clone();
+        tree
+    }
+
+    /// Evaluate the sampler at the corners (and centres, size ≥ 2) of `frontier` not yet stored.
+    fn sample_level(&mut self, frontier: &[u32], sampler: &dyn PhaseSampler) {
+        let lat = self.lattice;
+        let cells = &self.cells;
+        let mut pts: Vec<u64> = frontier
+            .par_iter()
+            .flat_map_iter(|&c| {
+                let cell = cells[c as usize];
+                let half = cell.size / 2;
+                let centre = (cell.size >= 2).then(|| lat.id(cell.min.map(|m| m + half)));
+                (0..8).map(move |k| lat.id(cell.corner(k))).chain(centre)
+            })
+            .collect();
+        pts.par_sort_unstable();
+        pts.dedup();
+        let nodes = &self.nodes;
+        pts.retain(|&p| nodes.get(p).is_none());
+        let vals: Vec<(f64, PhaseId)> = pts
+            .par_iter()
+            .map(|&p| sampler.sample(lat.pos(p)))
+            .collect();
+        self.nodes.reserve(pts.len());
+        for (p, (phi, chi)) in pts.into_iter().zip(vals) {
+            self.nodes.insert(p, phi, chi);
+        }
+    }
+
+    /// Sample and refine level by level, starting with the cells `frontier`.
+    fn refine_from(&mut self, mut frontier: Vec<u32>, sampler: &dyn PhaseSampler) {
+        while !frontier.is_empty() {
+            self.sample_level(&frontier, sampler);
+            frontier = self.refine_level(&frontier);
+        }
+    }
+
+    /// Give leaf `c` its 8 children (octant order); returns their indices.
+    fn split(&mut self, c: u32) -> std::ops::Range<u32> {
+        let first = self.cells.len() as u32;
+        let parent = self.cells[c as usize];
+        self.cells[c as usize].child = first;
+        let half = parent.size / 2;
+        for k in 0..8u64 {
+            self.cells.push(Cell {
+                min: [
+                    parent.min[0] + half * (k & 1),
+                    parent.min[1] + half * ((k >> 1) & 1),
+                    parent.min[2] + half * ((k >> 2) & 1),
+                ],
+                size: half,
+                child: LEAF,
+                chi: 0,
+                mixed: false,
+                slots: [0; 8],
+            });
+        }
+        first..first + 8
+    }
+
+    /// Safety net for samplers whose φ over-estimates the distance (a semi-Lagrangian φ is
+    /// only approximately a distance): the contour is watertight only if every face or edge
+    /// of an interface cell whose corners' χ differ is shared with unit cells, never with a
+    /// coarse leaf (which the stencils skip). With a lower-bound φ the split rule guarantees
+    /// this (a coarse leaf lies ≥ 3·s·h − (√3/2)·s·h from the interface) and this pass finds
+    /// nothing; otherwise it splits the offending coarse leaves until it holds.
+    fn conform(&mut self, sampler: &dyn PhaseSampler) {
+        loop {
+            let mut offending: Vec<u32> = self
+                .cells
+                .par_iter()
+                .filter(|c| c.child == LEAF && c.mixed && c.size == 1)
+                .flat_map_iter(|c| self.coarse_neighbours(c))
+                .collect();
+            offending.par_sort_unstable();
+            offending.dedup();
+            if offending.is_empty() {
+                return;
+            }
+            let frontier: Vec<u32> = offending.into_iter().flat_map(|c| self.split(c)).collect();
+            self.refine_from(frontier, sampler);
+        }
+    }
+
+    /// Coarse leaves sharing a face or an edge with unit cell `c` across which χ changes.
+    pub(crate) fn coarse_neighbours(&self, c: &Cell) -> Vec<u32> {
+        let chi = c.slots.map(|s| self.nodes.chi[s as usize]);
+        let mut out = Vec::new();
+        for d in 0..27usize {
+            let off = [d % 3, (d / 3) % 3, d / 9].map(|o| o as i64 - 1);
+            let zeros = off.iter().filter(|&&o| o == 0).count();
+            if zeros == 3 || zeros == 0 {
+                continue;
+            }
+            let mut n = [0u64; 3];
+            let mut inside = true;
+            for a in 0..3 {
+                let q = c.min[a] as i64 + off[a];
+                inside &= q >= 0 && (q as u64) < self.lattice.dims[a];
+                n[a] = q.max(0) as u64;
+            }
+            if !inside {
+                continue;
+            }
+            // Corners of `c` on the shared face / edge: bit a is 1 towards +a, 0 towards −a.
+            let shared = (0..8)
+                .filter(|&k| (0..3).all(|a| off[a] == 0 || ((k >> a) & 1 == 1) == (off[a] > 0)));
+            let mut labels = shared.map(|k| chi[k]);
+            let first = labels.next();
+            if labels.all(|l| Some(l) == first) {
+                continue;
+            }
+            let centre = DVec3::new(n[0] as f64 + 0.5, n[1] as f64 + 0.5, n[2] as f64 + 0.5);
+            if let Some(leaf) = self.leaf_at(centre) {
+                if self.cells[leaf as usize].size > 1 {
+                    out.push(leaf);
+                }
+            }
+        }
+        out
+    }
+
+    /// Apply the split rule to `frontier`; returns the children created (the next level).
+    fn refine_level(&mut self, frontier: &[u32]) -> Vec<u32> {
+        let lat = self.lattice;
+        let h = lat.h;
+        let (cells, nodes) = (&self.cells, &self.nodes);
+        let decisions: Vec<(bool, bool, [u32; 8])> = frontier
+            .par_iter()
+            .map(|&c| {
+                let cell = cells[c as usize];
+                let slots: [u32; 8] = std::array::from_fn(|k| {
+                    nodes.get(lat.id(cell.corner(k))).map_or(0, |s| s as u32)
+                });
+                let chi0 = nodes.chi[slots[0] as usize];
+                let mixed = slots.iter().any(|&s| nodes.chi[s as usize] != chi0);
+                let split = cell.size >= 2
+                    && (mixed || {
+                        let centre = lat.id(cell.min.map(|m| m + cell.size / 2));
+                        let phi = nodes.value(centre).map_or(0.0, |v| v.0);
+                        phi < SPLIT_FACTOR * h * cell.size as f64
+                    });
+                (split, mixed, slots)
+            })
+            .collect();
+        let mut next = Vec::new();
+        for (&c, (split, mixed, slots)) in frontier.iter().zip(decisions) {
+            let cell = &mut self.cells[c as usize];
+            cell.mixed = mixed;
+            cell.chi = self.nodes.chi[slots[0] as usize];
+            cell.slots = slots;
+            if !split {
+                continue;
+            }
+            next.extend(self.split(c));
+        }
+        next
+    }
+
+    /// All tree cells, internal and leaves (paper 004 Table 1 "Cells").
+    pub fn cell_count(&self) -> usize {
+        self.cells.len()
+    }
+
+    /// Finest cells whose corners' χ differ (paper 004 Table 1 "Intersect Cells").
+    pub fn interface_cell_count(&self) -> usize {
+        self.interface.len()
+    }
+
+    /// Number of lattice nodes where φ, χ were evaluated (one sampler call each).
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The leaf containing lattice-unit point `u` (already clamped to the box).
+    pub(crate) fn leaf_at(&self, u: DVec3) -> Option<u32> {
+        if self.cells.is_empty() {
+            return None;
+        }
+        let b = self.block as f64;
+        let r = [0, 1, 2].map(|a| ((u[a] / b).floor().max(0.0) as u64).min(self.roots[a] - 1));
+        let mut c = (r[0] + self.roots[0] * (r[1] + self.roots[1] * r[2])) as u32;
+        loop {
+            let cell = self.cells[c as usize];
+            if cell.child == LEAF {
+                return Some(c);
+            }
+            let half = (cell.size / 2) as f64;
+            let oct = (0..3).fold(0u32, |o, a| {
+                o | (((u[a] >= cell.min[a] as f64 + half) as u32) << a)
+            });
+            c = cell.child + oct;
+        }
+    }
+
+    /// φ, χ at any point from the tree (§6.1): `Some((interpolated φ, χ))` where the containing
+    /// leaf has uniform χ, `None` in interface cells (the caller then queries the mesh exactly).
+    /// Points outside the grid box are clamped to it.
+    pub fn sample(&self, x: DVec3) -> Option<(f64, PhaseId)> {
+        let lat = &self.lattice;
+        let hi = DVec3::new(lat.dims[0] as f64, lat.dims[1] as f64, lat.dims[2] as f64);
+        let u = ((x - lat.origin) / lat.h).clamp(DVec3::ZERO, hi);
+        let c = self.leaf_at(u)?;
+        let cell = self.cells[c as usize];
+        if cell.mixed {
+            return None;
+        }
+        let s = cell.size as f64;
+        let t = (u - DVec3::new(cell.min[0] as f64, cell.min[1] as f64, cell.min[2] as f64)) / s;
+        let mut phi = 0.0;
+        for k in 0..8 {
+            let w = (0..3).fold(1.0, |w, a| {
+                w * if (k >> a) & 1 == 1 { t[a] } else { 1.0 - t[a] }
+            });
+            phi += w * self.dist[cell.slots[k] as usize];
+        }
+        Some((phi, cell.chi))
+    }
+}

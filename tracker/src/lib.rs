@@ -1,0 +1,21 @@
+//! Multiphase interface tracking (DESIGN.md `tracker/`).
+#![deny(unsafe_code)]
+
+pub mod contour;
+pub mod contour_tracker;
+pub mod invariants;
+pub mod mesh;
+pub mod metrics;
+pub mod ply;
+pub mod query;
+pub mod redistance;
+pub mod tracker;
+
+pub use contour::{MdTree, PhaseSampler};
+pub use contour_tracker::ContourTracker;
+pub use invariants::InvariantError;
+pub use mesh::LabeledMesh;
+pub use ply::{read_ply, write_ply, PlyError};
+pub use query::{MeshQuery, Nearest};
+pub use tracker::{InterfaceTracker, StepStats, TrackerError};
+pub use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField, OUTSIDE};

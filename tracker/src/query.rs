@@ -1,0 +1,489 @@
+//! Exact unsigned distance and phase indicator of a point with respect to the interfaces of a
+//! [`LabeledMesh`] (paper 004 §4, Algorithm 1): nearest point through a bounding-box tree,
+//! then the phase from the feature the nearest point lies on — face: sign of
+//! `E = (x − y) · n`; edge: the triangle around the (possibly non-manifold) edge with the
+//! largest `|E|`; vertex: per-phase angle-weighted pseudonormals (§4.1, Fig. 3).
+
+mod adjacency;
+mod bvh;
+mod triangle;
+
+use crate::mesh::LabeledMesh;
+use adjacency::{Edges, Pseudonormals};
+use bvh::Bvh;
+use glam::DVec3;
+use polyphase_grid::{PhaseId, OUTSIDE};
+use triangle::{closest_point, Region};
+
+/// Result of a query: distance to the nearest interface point, the phase at the query point
+/// and the nearest point itself.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Nearest {
+    /// Unsigned distance φ (infinite when the mesh has no interface faces).
+    pub distance: f64,
+    /// Indicator χ.
+    pub phase: PhaseId,
+    /// Nearest interface point (the query point itself when there is none).
+    pub point: DVec3,
+}
+
+/// The mesh feature a nearest point lies on (indices into the source mesh).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Feature {
+    /// Interior of source triangle `t`.
+    Face(usize),
+    /// Edge between source vertices `a < b`.
+    Edge(u32, u32),
+    /// Source vertex.
+    Vertex(u32),
+}
+
+/// Corner positions and unit normal (zero when degenerate) of one triangle, kept together
+/// (96 bytes, aligned) so that testing a triangle touches as few cache lines as possible.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+struct Tri {
+    corners: [DVec3; 3],
+    normal: DVec3,
+}
+
+/// Distance + indicator oracle over the interface faces of a mesh (faces with an `OUTSIDE`
+/// label are not interfaces between phases and are left out). Owns its data, immutable after
+/// construction, `Send + Sync`: share one across threads for parallel sampling.
+#[derive(Clone, Debug)]
+pub struct MeshQuery {
+    background: PhaseId,
+    bvh: Bvh,
+    /// Geometry, in tree order.
+    tris: Vec<Tri>,
+    /// `[front, back]`, in tree order.
+    labels: Vec<[PhaseId; 2]>,
+    /// Source vertex indices, in tree order.
+    triangles: Vec<[u32; 3]>,
+    /// Source triangle index of each tree-order triangle.
+    source: Vec<u32>,
+    edges: Edges,
+    pseudonormals: Pseudonormals,
+}
+
+impl MeshQuery {
+    /// Builds the oracle for `mesh`; `background` is the phase reported everywhere when the
+    /// mesh has no interface faces. O(N log N). Panics if a triangle index is out of range or
+    /// the label count differs (meshes from [`crate::ply::read_ply`] and trackers satisfy
+    /// [`crate::invariants::check`]).
+    pub fn new(mesh: &LabeledMesh, background: PhaseId) -> MeshQuery {
+        assert_eq!(mesh.labels.len(), mesh.triangles.len(), "one label pair per triangle");
+        let interface: Vec<u32> = (0..mesh.triangles.len() as u32)
+            .filter(|&t| !mesh.labels[t as usize].contains(&OUTSIDE))
+            .collect();
+        let input_corners: Vec<[DVec3; 3]> =
+            interface.iter().map(|&t| mesh.corners(t as usize)).collect();
+        let mut bvh = Bvh::build(&input_corners);
+        let source: Vec<u32> = bvh.order.iter().map(|&i| interface[i as usize]).collect();
+        let corners: Vec<[DVec3; 3]> = bvh.order.iter().map(|&i| input_corners[i as usize]).collect();
+        bvh.order = Vec::new();
+        let normals: Vec<DVec3> = corners
+            .iter()
+            .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize_or_zero())
+            .collect();
+        let labels: Vec<[PhaseId; 2]> = source.iter().map(|&t| mesh.labels[t as usize]).collect();
+        let triangles: Vec<[u32; 3]> = source.iter().map(|&t| mesh.triangles[t as usize]).collect();
+        let edges = Edges::build(&triangles);
+        let pseudonormals =
+            Pseudonormals::build(mesh.vertices.len(), &triangles, &corners, &normals, &labels);
+        let tris = corners
+            .iter()
+            .zip(&normals)
+            .map(|(&corners, &normal)| Tri { corners, normal })
+            .collect();
+        MeshQuery {
+            background,
+            bvh,
+            tris,
+            labels,
+            triangles,
+            source,
+            edges,
+            pseudonormals,
+        }
+    }
+
+    /// Number of interface triangles the oracle answers for.
+    pub fn interface_triangle_count(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Distance and phase at `x`, exact up to floating-point rounding.
+    pub fn query(&self, x: DVec3) -> Nearest {
+        self.locate(x, f64::INFINITY)
+            .map(|(n, _)| n)
+            .unwrap_or(Nearest {
+                distance: f64::INFINITY,
+                phase: self.background,
+                point: x,
+            })
+    }
+
+    /// Like [`MeshQuery::query`], but only when an interface point lies within `max_distance`
+    /// of `x` (`None` otherwise). Much cheaper far from the interface, where the tree prunes
+    /// almost everything: suits "is φ below a threshold" tests.
+    pub fn query_within(&self, x: DVec3, max_distance: f64) -> Option<Nearest> {
+        self.locate(x, max_distance * max_distance).map(|(n, _)| n)
+    }
+
+    /// Unsigned distance from `x` to the nearest interface point (infinite without interfaces).
+    pub fn distance(&self, x: DVec3) -> f64 {
+        let mut best = None;
+        let d2 = self.bvh.nearest(x, f64::INFINITY, |i, bound2| {
+            let Tri {
+                corners: [a, b, c],
+                normal,
+            } = self.tris[i];
+            let plane = (x - a).dot(normal);
+            if plane * plane > bound2 {
+                return bound2;
+            }
+            let (y, _) = closest_point(x, a, b, c);
+            let d2 = (x - y).length_squared();
+            if d2 < bound2 {
+                best = Some(i);
+                d2
+            } else {
+                bound2
+            }
+        });
+        match best {
+            Some(_) => d2.sqrt(),
+            None => f64::INFINITY,
+        }
+    }
+
+    /// Nearest point within squared distance `bound2` and its feature, with the indicator.
+    /// Among triangles at exactly the same distance the lowest tree index wins, so the answer
+    /// does not depend on the visiting order; the phase is then decided by the shared
+    /// edge or vertex tables, never by which of the incident triangles was found.
+    pub(crate) fn locate(&self, x: DVec3, bound2: f64) -> Option<(Nearest, Feature)> {
+        let mut best: Option<(usize, DVec3, Region)> = None;
+        let d2 = self.bvh.nearest(x, bound2, |i, bound2| {
+            let Tri {
+                corners: [a, b, c],
+                normal,
+            } = self.tris[i];
+            // The distance to the plane bounds the distance to the triangle from below.
+            let plane = (x - a).dot(normal);
+            if plane * plane > bound2 {
+                return bound2;
+            }
+            let (y, region) = closest_point(x, a, b, c);
+            let d2 = (x - y).length_squared();
+            let better = d2 < bound2
+                || (d2 == bound2 && best.is_some_and(|(j, _, _)| i < j))
+                || (d2 == bound2 && best.is_none());
+            if better {
+                best = Some((i, y, region));
+                d2
+            } else {
+                bound2
+            }
+        });
+        let (t, y, region) = best?;
+        let side = |t: usize, e: f64| {
+            let [front, back] = self.labels[t];
+            if e > 0.0 {
+                front
+            } else {
+                back
+            }
+        };
+        let (phase, feature) = match region {
+            Region::Face => (
+                side(t, (x - y).dot(self.tris[t].normal)),
+                Feature::Face(self.source[t] as usize),
+            ),
+            Region::Edge(k) => {
+                let e = self.edges.tri_edges[t][k as usize];
+                let mut chosen = (t, 0.0f64);
+                let mut max_abs = -1.0;
+                for &s in self.edges.triangles(e) {
+                    let s = s as usize;
+                    let e_s = (x - y).dot(self.tris[s].normal);
+                    if e_s.abs() > max_abs {
+                        max_abs = e_s.abs();
+                        chosen = (s, e_s);
+                    }
+                }
+                let (u, v) = (self.triangles[t][k as usize], self.triangles[t][(k as usize + 1) % 3]);
+                (side(chosen.0, chosen.1), Feature::Edge(u.min(v), u.max(v)))
+            }
+            Region::Vertex(k) => {
+                let v = self.triangles[t][k as usize];
+                let mut phase = self.labels[t][1];
+                let mut min_s = f64::INFINITY;
+                for &(p, n) in self.pseudonormals.of(v) {
+                    let s = (x - y).dot(n);
+                    if s < min_s {
+                        min_s = s;
+                        phase = p;
+                    }
+                }
+                (phase, Feature::Vertex(v))
+            }
+        };
+        Some((
+            Nearest {
+                distance: d2.sqrt(),
+                phase,
+                point: y,
+            },
+            feature,
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::invariants::check;
+    use crate::mesh::fixtures::{icosphere, lattice_mesh, push_oriented, Rng};
+
+    fn assert_send_sync<T: Send + Sync>() {}
+
+    /// Distance by testing every interface triangle.
+    fn brute_distance(mesh: &LabeledMesh, x: DVec3) -> f64 {
+        (0..mesh.triangle_count())
+            .filter(|&t| !mesh.labels[t].contains(&OUTSIDE))
+            .map(|t| {
+                let [a, b, c] = mesh.corners(t);
+                (x - closest_point(x, a, b, c).0).length_squared()
+            })
+            .fold(f64::INFINITY, f64::min)
+            .sqrt()
+    }
+
+    /// A tetrahedron `[a, b, c, d]` cut through `c`, `d` and the midpoint of `ab` into phase 1
+    /// (the half at `a`) and phase 2 (at `b`) inside phase 0. Edge `cd` is a triple line; `c`
+    /// and `d` are non-manifold vertices at convex corners.
+    fn split_tet(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> (LabeledMesh, impl Fn(DVec3) -> PhaseId) {
+        let m = 0.5 * (a + b);
+        let mut mesh = LabeledMesh {
+            vertices: vec![a, b, c, d, m],
+            ..LabeledMesh::default()
+        };
+        let t1 = [a, m, c, d];
+        let t2 = [m, b, c, d];
+        let c1 = (a + m + c + d) / 4.0;
+        let c2 = (m + b + c + d) / 4.0;
+        for (tri, inner, phase) in [
+            ([0, 4, 2], c1, 1),
+            ([0, 4, 3], c1, 1),
+            ([0, 2, 3], c1, 1),
+            ([4, 1, 2], c2, 2),
+            ([4, 1, 3], c2, 2),
+            ([1, 2, 3], c2, 2),
+        ] {
+            push_oriented(&mut mesh, tri, inner, 0, phase);
+        }
+        push_oriented(&mut mesh, [4, 2, 3], c1, 2, 1);
+        let inside = |t: [DVec3; 4], x: DVec3| {
+            let vol = |p: DVec3, q: DVec3, r: DVec3, s: DVec3| (q - p).dot((r - p).cross(s - p));
+            let total = vol(t[0], t[1], t[2], t[3]).signum();
+            [
+                vol(x, t[1], t[2], t[3]),
+                vol(t[0], x, t[2], t[3]),
+                vol(t[0], t[1], x, t[3]),
+                vol(t[0], t[1], t[2], x),
+            ]
+            .iter()
+            .all(|v| v * total > 0.0)
+        };
+        let phase = move |x: DVec3| {
+            if inside(t1, x) {
+                1
+            } else if inside(t2, x) {
+                2
+            } else {
+                0
+            }
+        };
+        (mesh, phase)
+    }
+
+    /// Phase of a point in the lattice configuration `phase` on `n³` cells of the unit cube.
+    fn lattice_phase(n: usize, phase: impl Fn(usize, usize, usize) -> PhaseId) -> impl Fn(DVec3) -> PhaseId {
+        move |x: DVec3| {
+            let c = |v: f64| ((v * n as f64).floor() as usize).min(n - 1);
+            phase(c(x.x), c(x.y), c(x.z))
+        }
+    }
+
+    /// Random points: uniform in `[lo, hi]` plus clusters of radius `r` around every vertex
+    /// and edge midpoint of the interface, where edge and vertex cases occur.
+    fn probe_points(mesh: &LabeledMesh, lo: DVec3, hi: DVec3, r: f64, per: usize, seed: u64) -> Vec<DVec3> {
+        let mut rng = Rng(seed);
+        let mut pts: Vec<DVec3> = (0..2000).map(|_| rng.point(lo, hi)).collect();
+        let mut anchors = Vec::new();
+        for t in 0..mesh.triangle_count() {
+            if mesh.labels[t].contains(&OUTSIDE) {
+                continue;
+            }
+            let [a, b, c] = mesh.corners(t);
+            anchors.extend([a, b, c, 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a)]);
+        }
+        for p in anchors {
+            for _ in 0..per {
+                let x = rng.point(p - DVec3::splat(r), p + DVec3::splat(r));
+                if x.cmpgt(lo).all() && x.cmplt(hi).all() {
+                    pts.push(x);
+                }
+            }
+        }
+        pts
+    }
+
+    /// Checks the indicator against `truth` at every point farther than 1e-6 from the
+    /// interface; returns how many points fell in the face, edge and vertex cases.
+    fn check_indicator(
+        mesh: &LabeledMesh,
+        truth: impl Fn(DVec3) -> PhaseId,
+        points: &[DVec3],
+    ) -> [usize; 3] {
+        let q = MeshQuery::new(mesh, 0);
+        let mut cases = [0; 3];
+        for &x in points {
+            let (n, feature) = q.locate(x, f64::INFINITY).unwrap();
+            if n.distance <= 1e-6 {
+                continue;
+            }
+            assert_eq!(n.phase, truth(x), "x = {x}, feature {feature:?}, distance {}", n.distance);
+            cases[match feature {
+                Feature::Face(_) => 0,
+                Feature::Edge(..) => 1,
+                Feature::Vertex(_) => 2,
+            }] += 1;
+        }
+        cases
+    }
+
+    #[test]
+    fn query_is_send_and_sync() {
+        assert_send_sync::<MeshQuery>();
+    }
+
+    #[test]
+    fn distance_matches_brute_force() {
+        let (tet, _) = split_tet(DVec3::ZERO, DVec3::X, DVec3::new(0.3, 0.9, 0.1), DVec3::new(0.4, 0.2, 0.7));
+        let meshes = [
+            icosphere(DVec3::new(0.1, 0.2, 0.3), 0.8, 3, 1, 0),
+            lattice_mesh(4, |i, j, k| ((i * 7 + j * 3 + k * 5) % 3) as PhaseId),
+            tet,
+        ];
+        let mut rng = Rng(7);
+        for mesh in &meshes {
+            let q = MeshQuery::new(mesh, 0);
+            for _ in 0..3000 {
+                let x = rng.point(DVec3::splat(-1.5), DVec3::splat(1.5));
+                let brute = brute_distance(mesh, x);
+                let n = q.query(x);
+                // Same closest-point arithmetic and an exact minimum: the tree must find the
+                // very same value, not just a close one.
+                assert_eq!(n.distance, brute, "x = {x}");
+                assert_eq!(q.distance(x), brute);
+                // The reported point realises the distance (rounding of one subtraction).
+                assert!((n.point.distance(x) - brute).abs() <= 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn bounded_query_agrees() {
+        let mesh = icosphere(DVec3::ZERO, 1.0, 2, 1, 0);
+        let q = MeshQuery::new(&mesh, 0);
+        let mut rng = Rng(3);
+        for _ in 0..1000 {
+            let x = rng.point(DVec3::splat(-2.0), DVec3::splat(2.0));
+            let full = q.query(x);
+            match q.query_within(x, 0.3) {
+                Some(n) => assert_eq!(n, full),
+                None => assert!(full.distance > 0.3),
+            }
+        }
+    }
+
+    #[test]
+    fn empty_interface_gives_background() {
+        // Only OUTSIDE faces: a single-phase box.
+        let mesh = lattice_mesh(1, |_, _, _| 3);
+        let q = MeshQuery::new(&mesh, 3);
+        assert_eq!(q.interface_triangle_count(), 0);
+        let n = q.query(DVec3::splat(0.5));
+        assert_eq!((n.distance, n.phase), (f64::INFINITY, 3));
+        assert_eq!(q.query_within(DVec3::ZERO, 1.0), None);
+    }
+
+    #[test]
+    fn indicator_two_phase_cube() {
+        let f = |i: usize, _: usize, _: usize| i as PhaseId;
+        let mesh = lattice_mesh(2, f);
+        let pts = probe_points(&mesh, DVec3::ZERO, DVec3::ONE, 0.05, 20, 1);
+        let cases = check_indicator(&mesh, lattice_phase(2, f), &pts);
+        assert!(cases[0] > 1000, "{cases:?}");
+    }
+
+    #[test]
+    fn indicator_slabs_quadrants_and_triple_lines() {
+        let configs: [(usize, fn(usize, usize, usize) -> PhaseId); 3] = [
+            (3, |i, _, _| i as PhaseId),
+            (2, |i, j, _| (i + 2 * j) as PhaseId),
+            (2, |i, j, _| if i == 0 { 0 } else { 1 + j as PhaseId }),
+        ];
+        for (seed, (n, f)) in configs.into_iter().enumerate() {
+            let mesh = lattice_mesh(n, f);
+            assert_eq!(check(&mesh, 0.0), Ok(()));
+            let pts = probe_points(&mesh, DVec3::ZERO, DVec3::ONE, 0.05, 20, seed as u64);
+            check_indicator(&mesh, lattice_phase(n, f), &pts);
+        }
+    }
+
+    #[test]
+    fn indicator_at_box_corners_and_staircases() {
+        let configs: [(usize, fn(usize, usize, usize) -> PhaseId); 3] = [
+            // A cube inside another phase: convex corners and edges.
+            (3, |i, j, k| PhaseId::from(i == 1 && j == 1 && k == 1)),
+            // A staircase: convex, reflex and saddle vertices.
+            (4, |i, j, k| PhaseId::from(i + j + k <= 3)),
+            // Three phases scattered: non-manifold edges and vertices, pinched regions.
+            (4, |i, j, k| ((i * 7 + j * 3 + k * 5 + i * j) % 3) as PhaseId),
+        ];
+        let mut total = [0; 3];
+        for (seed, (n, f)) in configs.into_iter().enumerate() {
+            let mesh = lattice_mesh(n, f);
+            assert_eq!(check(&mesh, 0.0), Ok(()));
+            let pts = probe_points(&mesh, DVec3::ZERO, DVec3::ONE, 0.08, 6, 10 + seed as u64);
+            let cases = check_indicator(&mesh, lattice_phase(n, f), &pts);
+            for k in 0..3 {
+                total[k] += cases[k];
+            }
+        }
+        // The probes must exercise every branch of Algorithm 1.
+        assert!(total.iter().all(|&c| c > 100), "{total:?}");
+    }
+
+    #[test]
+    fn indicator_at_non_manifold_vertices_and_edges() {
+        let tets = [
+            (DVec3::ZERO, DVec3::X, DVec3::new(0.3, 0.9, 0.1), DVec3::new(0.4, 0.2, 0.7)),
+            // Flat and sharp: small dihedral angles along the triple line.
+            (DVec3::ZERO, DVec3::new(1.0, 0.1, 0.0), DVec3::new(0.6, 0.05, 0.08), DVec3::new(0.5, 0.9, 0.02)),
+        ];
+        for (seed, (a, b, c, d)) in tets.into_iter().enumerate() {
+            let (mesh, truth) = split_tet(a, b, c, d);
+            assert_eq!(check(&mesh, 0.0), Ok(()));
+            let q = MeshQuery::new(&mesh, 0);
+            // Vertices c and d carry one pseudonormal per phase.
+            assert_eq!(q.pseudonormals.of(2).len(), 3);
+            let pts = probe_points(&mesh, DVec3::splat(-1.0), DVec3::splat(2.0), 0.1, 200, 20 + seed as u64);
+            let cases = check_indicator(&mesh, truth, &pts);
+            assert!(cases[1] > 100 && cases[2] > 100, "{cases:?}");
+        }
+    }
+}

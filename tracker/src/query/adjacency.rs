@@ -1,0 +1,113 @@
+//! Edge → triangles and vertex → per-phase pseudonormal tables for the indicator query
+//! (paper 004 §4.1), in compressed-sparse-row layout built by sorting (deterministic).
+
+use glam::DVec3;
+use polyphase_grid::PhaseId;
+
+/// Undirected edges of the triangles, with the triangles around each.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Edges {
+    /// `tri_edges[t][k]`: edge id of edge `k` (corner `k` → corner `(k + 1) % 3`) of triangle `t`.
+    pub(crate) tri_edges: Vec<[u32; 3]>,
+    /// Triangles of edge `e`: `tris[offsets[e] .. offsets[e + 1]]`, ascending.
+    pub(crate) offsets: Vec<u32>,
+    pub(crate) tris: Vec<u32>,
+}
+
+impl Edges {
+    /// Builds the table by sorting `(min vertex, max vertex, triangle)` records.
+    pub(crate) fn build(triangles: &[[u32; 3]]) -> Edges {
+        let mut records: Vec<(u32, u32, u32, u8)> = Vec::with_capacity(triangles.len() * 3);
+        for (t, tri) in triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (u, v) = (tri[k], tri[(k + 1) % 3]);
+                records.push((u.min(v), u.max(v), t as u32, k as u8));
+            }
+        }
+        records.sort_unstable();
+        let mut edges = Edges {
+            tri_edges: vec![[0; 3]; triangles.len()],
+            offsets: Vec::with_capacity(records.len() / 2 + 1),
+            tris: Vec::with_capacity(records.len()),
+        };
+        for (i, r) in records.iter().enumerate() {
+            if i == 0 || (records[i - 1].0, records[i - 1].1) != (r.0, r.1) {
+                edges.offsets.push(edges.tris.len() as u32);
+            }
+            edges.tri_edges[r.2 as usize][r.3 as usize] = edges.offsets.len() as u32 - 1;
+            edges.tris.push(r.2);
+        }
+        edges.offsets.push(edges.tris.len() as u32);
+        edges
+    }
+
+    /// Triangles sharing edge `e`, ascending.
+    #[inline]
+    pub(crate) fn triangles(&self, e: u32) -> &[u32] {
+        let e = e as usize;
+        &self.tris[self.offsets[e] as usize..self.offsets[e + 1] as usize]
+    }
+}
+
+/// Per vertex, one unit angle-weighted pseudonormal per incident phase, pointing out of that
+/// phase (paper 004 §4.1, Fig. 3; Bærentzen & Aanæs): `N_p = Σ θ_t n_t` over the triangles
+/// `t` at the vertex that carry `p`, with `n_t` flipped when `p` is `t`'s front label.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Pseudonormals {
+    /// Entries of vertex `v`: `entries[offsets[v] .. offsets[v + 1]]`, by ascending phase.
+    offsets: Vec<u32>,
+    entries: Vec<(PhaseId, DVec3)>,
+}
+
+impl Pseudonormals {
+    /// Builds the table for `n_vertices` vertices from triangles, their corner positions,
+    /// unit normals and `[front, back]` labels. Sums run in (vertex, phase, triangle) order.
+    pub(crate) fn build(
+        n_vertices: usize,
+        triangles: &[[u32; 3]],
+        corners: &[[DVec3; 3]],
+        normals: &[DVec3],
+        labels: &[[PhaseId; 2]],
+    ) -> Pseudonormals {
+        let mut records: Vec<(u32, PhaseId, u32, DVec3)> = Vec::with_capacity(triangles.len() * 6);
+        for (t, tri) in triangles.iter().enumerate() {
+            let p = &corners[t];
+            for k in 0..3 {
+                let e1 = p[(k + 1) % 3] - p[k];
+                let e2 = p[(k + 2) % 3] - p[k];
+                // atan2 of |cross| and dot is accurate for all angles and finite for zero edges.
+                let angle = e1.cross(e2).length().atan2(e1.dot(e2));
+                let w = angle * normals[t];
+                records.push((tri[k], labels[t][1], t as u32, w));
+                records.push((tri[k], labels[t][0], t as u32, -w));
+            }
+        }
+        records.sort_unstable_by(|a, b| (a.0, a.1, a.2).cmp(&(b.0, b.1, b.2)));
+        let mut table = Pseudonormals {
+            offsets: Vec::with_capacity(n_vertices + 1),
+            entries: Vec::new(),
+        };
+        let mut r = 0;
+        for v in 0..n_vertices as u32 {
+            table.offsets.push(table.entries.len() as u32);
+            while r < records.len() && records[r].0 == v {
+                let phase = records[r].1;
+                let mut sum = DVec3::ZERO;
+                while r < records.len() && records[r].0 == v && records[r].1 == phase {
+                    sum += records[r].3;
+                    r += 1;
+                }
+                table.entries.push((phase, sum.normalize_or_zero()));
+            }
+        }
+        table.offsets.push(table.entries.len() as u32);
+        table
+    }
+
+    /// `(phase, unit pseudonormal)` pairs of vertex `v`, by ascending phase.
+    #[inline]
+    pub(crate) fn of(&self, v: u32) -> &[(PhaseId, DVec3)] {
+        let v = v as usize;
+        &self.entries[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+    }
+}
