@@ -28,6 +28,12 @@ pub enum BenchCommand {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Pressure and viscosity solves of a two-phase 1000:1 sphere, MIC(0)-PCG vs multigrid-PCG.
+    Solver {
+        /// Resolutions, comma separated.
+        #[arg(long, value_delimiter = ',', default_value = "32,64")]
+        res: Vec<usize>,
+    },
 }
 
 /// One row of the contour benchmark.
@@ -65,6 +71,11 @@ pub fn bench(cmd: BenchCommand) -> Result<()> {
                 std::fs::write(&path, serde_json::to_string_pretty(&rows)?)
                     .with_context(|| format!("cannot write {}", path.display()))?;
             }
+            Ok(())
+        }
+        BenchCommand::Solver { res } => {
+            let rows = polyphase_solver::bench::run(&res)?;
+            println!("{}", polyphase_solver::bench::format_table(&rows));
             Ok(())
         }
     }
@@ -131,18 +142,26 @@ fn contour_table(rows: &[ContourRow]) -> String {
     };
     line(&mut s, "Res (n^3)", &|r| format!("{}^3", r.res));
     line(&mut s, "Cells", &|r| r.cells.to_string());
-    line(&mut s, "Intersect cells", &|r| r.interface_cells.to_string());
+    line(&mut s, "Intersect cells", &|r| {
+        r.interface_cells.to_string()
+    });
     line(&mut s, "N / N_T", &|r| {
         format!("{:.3}", r.interface_cells as f64 / r.cells.max(1) as f64)
     });
     line(&mut s, "Vertices", &|r| r.vertices.to_string());
-    line(&mut s, "Building tree (s)", &|r| format!("{:.4}", r.build_s));
+    line(&mut s, "Building tree (s)", &|r| {
+        format!("{:.4}", r.build_s)
+    });
     line(&mut s, "Contouring (s)", &|r| format!("{:.4}", r.contour_s));
-    line(&mut s, "Redistancing (s)", &|r| format!("{:.4}", r.redistance_s));
+    line(&mut s, "Redistancing (s)", &|r| {
+        format!("{:.4}", r.redistance_s)
+    });
     line(&mut s, "Total (s)", &|r| format!("{:.4}", r.total_s));
     line(&mut s, "Indicator accuracy", &|r| {
         format!("{:.4}%", r.indicator_accuracy * 100.0)
     });
-    line(&mut s, "max |phi_e / h|", &|r| format!("{:.2}", r.max_mismatch_over_h));
+    line(&mut s, "max |phi_e / h|", &|r| {
+        format!("{:.2}", r.max_mismatch_over_h)
+    });
     s
 }

@@ -3,6 +3,7 @@
 
 mod bench;
 mod output;
+mod render;
 mod run;
 mod summary;
 
@@ -12,7 +13,11 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "polyphase", version, about = "Multiphase interface tracking and fluid simulation")]
+#[command(
+    name = "polyphase",
+    version,
+    about = "Multiphase interface tracking and fluid simulation"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -38,6 +43,8 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Render a run folder with Mitsuba 3: images, movie and plots into DIR/render and DIR/plots.
+    Render(render::RenderArgs),
     /// List the built-in scenes.
     Scenes,
     /// Measure the stages and print tables shaped like the papers'.
@@ -64,6 +71,7 @@ fn main() -> ExitCode {
                 frames,
             })
         }),
+        Command::Render(args) => render::render(&args),
         Command::Scenes => {
             list_scenes();
             Ok(())

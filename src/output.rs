@@ -37,11 +37,6 @@ impl RunFolder {
         })
     }
 
-    /// Path of a file in the folder.
-    pub fn path(&self, name: &str) -> PathBuf {
-        self.root.join(name)
-    }
-
     /// Writes `bytes` to `name` atomically.
     pub fn write(&self, name: &str, bytes: &[u8]) -> Result<()> {
         write_atomic(&self.root.join(name), bytes)

@@ -94,7 +94,14 @@ pub fn run(opts: &RunOptions) -> Result<()> {
             .push(("write", write_start.elapsed().as_secs_f64()));
         let mut line = frame_line(frame, time, steps, &stats, &tracker, &names);
         if frame == frames && scene.file.time.periodic {
-            add_period_errors(&mut line, &tracker, &initial_mesh, &reference, &names, &scene);
+            add_period_errors(
+                &mut line,
+                &tracker,
+                &initial_mesh,
+                &reference,
+                &names,
+                &scene,
+            );
         }
         folder.append_stats(&line)?;
     }

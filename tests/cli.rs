@@ -12,7 +12,13 @@ fn run_writes_frames_stats_and_resolved_scene() {
     let dir = scratch("run_writes");
     let out = dir.join("zalesak");
     let o = polyphase(&[
-        "run", "zalesak", "--resolution", "16", "--frames", "2", "--out",
+        "run",
+        "zalesak",
+        "--resolution",
+        "16",
+        "--frames",
+        "2",
+        "--out",
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -54,15 +60,26 @@ fn one_and_two_threads_write_identical_frames() {
     let run = |threads: &str| {
         let out = dir.join(format!("t{threads}"));
         let o = polyphase(&[
-            "run", "enright", "--resolution", "16", "--frames", "2", "--threads", threads,
-            "--out", out.to_str().unwrap(),
+            "run",
+            "enright",
+            "--resolution",
+            "16",
+            "--frames",
+            "2",
+            "--threads",
+            threads,
+            "--out",
+            out.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         (0..=2)
             .map(|f| fs::read(out.join(format!("frames/{f:04}.ply"))).unwrap())
             .collect::<Vec<_>>()
     };
-    assert!(run("1") == run("2"), "frames differ between 1 and 2 threads");
+    assert!(
+        run("1") == run("2"),
+        "frames differ between 1 and 2 threads"
+    );
 }
 
 #[test]
@@ -70,17 +87,42 @@ fn bad_scenes_fail_with_one_line_and_write_nothing() {
     let dir = scratch("bad_scenes");
     let good = polyphase_scenes::BUILTIN[0].1;
     let cases = [
-        ("unknown_phase", good.replace("phase = \"blue\"", "phase = \"oil\""), "shapes[1].phase"),
-        ("negative_res", good.replace("resolution = 64", "resolution = -8"), "resolution"),
-        ("missing_field", good.replace("end = 1.0\n", ""), "missing field `end`"),
-        ("nan", good.replace("radius = 0.15\n\n# Upper", "radius = nan\n\n# Upper"), "shapes[0].radius"),
-        ("not_toml", "name = \"x\"\nresolution = [".to_string(), "bad.toml"),
+        (
+            "unknown_phase",
+            good.replace("phase = \"blue\"", "phase = \"oil\""),
+            "shapes[1].phase",
+        ),
+        (
+            "negative_res",
+            good.replace("resolution = 64", "resolution = -8"),
+            "resolution",
+        ),
+        (
+            "missing_field",
+            good.replace("end = 1.0\n", ""),
+            "missing field `end`",
+        ),
+        (
+            "nan",
+            good.replace("radius = 0.15\n\n# Upper", "radius = nan\n\n# Upper"),
+            "shapes[0].radius",
+        ),
+        (
+            "not_toml",
+            "name = \"x\"\nresolution = [".to_string(),
+            "bad.toml",
+        ),
     ];
     for (name, text, expect) in cases {
         let path = dir.join(format!("{name}.toml"));
         fs::write(&path, text).unwrap();
         let out = dir.join(format!("{name}_out"));
-        let o = polyphase(&["run", path.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        let o = polyphase(&[
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{name}: should fail");
         assert_eq!(err.trim_end().lines().count(), 1, "{name}: one line: {err}");
@@ -96,7 +138,14 @@ fn unwritable_output_and_unknown_scene_are_clear_errors() {
     let file = dir.join("a_file");
     fs::write(&file, "not a folder").unwrap();
     let out = file.join("out");
-    let o = polyphase(&["run", "zalesak", "--resolution", "8", "--out", out.to_str().unwrap()]);
+    let o = polyphase(&[
+        "run",
+        "zalesak",
+        "--resolution",
+        "8",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(err.contains("cannot create output folder"), "{err}");
@@ -104,5 +153,8 @@ fn unwritable_output_and_unknown_scene_are_clear_errors() {
     let o = polyphase(&["run", "no_such_scene"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
-    assert!(err.contains("no_such_scene") && err.contains("zalesak"), "{err}");
+    assert!(
+        err.contains("no_such_scene") && err.contains("zalesak"),
+        "{err}"
+    );
 }

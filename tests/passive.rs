@@ -36,7 +36,8 @@ fn run(name: &str, resolution: i64, steps: Option<usize>) -> Finished {
         invariants::check(tracker.mesh(), min_area)
             .unwrap_or_else(|e| panic!("{name} step {s}: {e}"));
     }
-    let reference = volume::reference_volumes(&scene.initial, &scene.grid, n, volume::DEFAULT_DEPTH);
+    let reference =
+        volume::reference_volumes(&scene.initial, &scene.grid, n, volume::DEFAULT_DEPTH);
     Finished {
         initial,
         tracker,
@@ -57,7 +58,12 @@ fn volume_errors(f: &Finished) -> Vec<f64> {
 #[test]
 fn every_builtin_scene_keeps_the_mesh_invariants_every_step() {
     for (name, _) in polyphase_scenes::BUILTIN {
-        let slab = polyphase_scenes::builtin(name).unwrap().unwrap().file.domain.slab;
+        let slab = polyphase_scenes::builtin(name)
+            .unwrap()
+            .unwrap()
+            .file
+            .domain
+            .slab;
         // Low resolutions keep the suite fast; invariants must hold at any resolution.
         let res = if slab { 64 } else { 16 };
         run(name, res, Some(8));

@@ -45,7 +45,12 @@ impl GridSpec {
 
     /// Upper corner of the domain the grid covers.
     pub fn upper(&self) -> DVec3 {
-        self.origin + DVec3::new(self.dims[0] as f64, self.dims[1] as f64, self.dims[2] as f64) * self.h
+        self.origin
+            + DVec3::new(
+                self.dims[0] as f64,
+                self.dims[1] as f64,
+                self.dims[2] as f64,
+            ) * self.h
     }
 }
 

@@ -11,7 +11,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("nested", include_str!("../builtin/nested.toml")),
     ("vortex4", include_str!("../builtin/vortex4.toml")),
     ("circle3", include_str!("../builtin/circle3.toml")),
-    ("circle3_rotate", include_str!("../builtin/circle3_rotate.toml")),
+    (
+        "circle3_rotate",
+        include_str!("../builtin/circle3_rotate.toml"),
+    ),
     ("checker", include_str!("../builtin/checker.toml")),
 ];
 
@@ -35,7 +38,11 @@ pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
     if !path.exists() {
         return Err(SceneError::Unknown {
             name: name_or_path.to_string(),
-            known: BUILTIN.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "),
+            known: BUILTIN
+                .iter()
+                .map(|(n, _)| *n)
+                .collect::<Vec<_>>()
+                .join(", "),
         });
     }
     let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
@@ -72,14 +79,35 @@ mod tests {
     fn bad_scenes_name_the_problem_and_place() {
         let good = BUILTIN[0].1;
         let cases: Vec<(String, &str)> = vec![
-            (good.replace("resolution = 64", "resolution = -3"), "resolution"),
-            (good.replace("phase = \"blue\"", "phase = \"green\""), "shapes[1].phase"),
-            (good.replace("radius = 0.15\n\n# Upper", "radius = nan\n\n# Upper"), "shapes[0].radius"),
+            (
+                good.replace("resolution = 64", "resolution = -3"),
+                "resolution",
+            ),
+            (
+                good.replace("phase = \"blue\"", "phase = \"green\""),
+                "shapes[1].phase",
+            ),
+            (
+                good.replace("radius = 0.15\n\n# Upper", "radius = nan\n\n# Upper"),
+                "shapes[0].radius",
+            ),
             (good.replace("end = 1.0\n", ""), "missing field `end`"),
-            (good.replace("density = 1.2", "density = -1.2"), "phases[0].density"),
-            (good.replace("frames = 24", "frames = 24\nfrmes = 3"), "unknown field `frmes`"),
-            (good.replace("kind = \"box\"", "kind = \"torus\""), "shapes[2].kind"),
-            (good.replace("[1.0, 1.0, 1.0]", "[1.0, inf, 1.0]"), "domain.hi[1]"),
+            (
+                good.replace("density = 1.2", "density = -1.2"),
+                "phases[0].density",
+            ),
+            (
+                good.replace("frames = 24", "frames = 24\nfrmes = 3"),
+                "unknown field `frmes`",
+            ),
+            (
+                good.replace("kind = \"box\"", "kind = \"torus\""),
+                "shapes[2].kind",
+            ),
+            (
+                good.replace("[1.0, 1.0, 1.0]", "[1.0, inf, 1.0]"),
+                "domain.hi[1]",
+            ),
         ];
         for (text, expect) in cases {
             let err = Scene::parse(&text, "test.toml").unwrap_err().to_string();
@@ -92,6 +120,9 @@ mod tests {
     #[test]
     fn unknown_name_lists_the_builtins() {
         let err = load("no-such-scene").unwrap_err().to_string();
-        assert!(err.contains("zalesak") && err.contains("no-such-scene"), "{err}");
+        assert!(
+            err.contains("zalesak") && err.contains("no-such-scene"),
+            "{err}"
+        );
     }
 }

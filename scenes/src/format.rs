@@ -26,6 +26,43 @@ pub struct SceneFile {
     /// Initial shapes, painted in order: a later shape overrides an earlier one where they overlap.
     #[serde(default)]
     pub shapes: Vec<ShapeSpec>,
+    /// Optional hints for the offline renderer (`render/`); absent fields use its defaults.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub render: Option<RenderHints>,
+}
+
+/// Render hints read by the Mitsuba pipeline; every field optional.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderHints {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_origin: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_target: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub up: Option<[f64; 3]>,
+    /// Horizontal field of view, degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fov: Option<f64>,
+    /// Phases drawn as rough plastic instead of dielectric liquid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub opaque: Option<Vec<String>>,
+    /// Draw the domain walls as thin glass.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tank: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub smooth: Option<bool>,
+    /// Distance (m) over which a liquid's transmittance equals its colour.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub absorption_length: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ambient: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub light: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fps: Option<u32>,
 }
 
 /// The interface tracker a scene runs with (DESIGN.md "InterfaceTracker").

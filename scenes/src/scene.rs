@@ -289,9 +289,9 @@ fn compile_primitive(s: &ShapeSpec, place: &str, bad: &Bad) -> Result<Primitive,
         })
     };
     let radius = || -> Result<f64, SceneError> {
-        let r = s.radius.ok_or_else(|| {
-            bad(place, format!("kind '{}' needs the field 'radius'", s.kind))
-        })?;
+        let r = s
+            .radius
+            .ok_or_else(|| bad(place, format!("kind '{}' needs the field 'radius'", s.kind)))?;
         positive(r, &format!("{place}.radius"), bad)
     };
     Ok(match s.kind.as_str() {

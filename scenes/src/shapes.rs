@@ -8,12 +8,24 @@ use polyphase_grid::PhaseId;
 /// A solid primitive; `sdf` is negative inside.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Primitive {
-    Sphere { center: DVec3, radius: f64 },
+    Sphere {
+        center: DVec3,
+        radius: f64,
+    },
     /// Infinite circular cylinder with axis parallel to z through `center`.
-    Cylinder { center: DVec3, radius: f64 },
-    Box { lo: DVec3, hi: DVec3 },
+    Cylinder {
+        center: DVec3,
+        radius: f64,
+    },
+    Box {
+        lo: DVec3,
+        hi: DVec3,
+    },
     /// Keeps the side `normal` (unit) points away from.
-    HalfSpace { point: DVec3, normal: DVec3 },
+    HalfSpace {
+        point: DVec3,
+        normal: DVec3,
+    },
 }
 
 impl Primitive {

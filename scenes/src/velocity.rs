@@ -10,15 +10,22 @@ use polyphase_grid::VelocityField;
 pub enum AnalyticVelocity {
     Still,
     /// Rigid rotation about the axis through `center` parallel to +z.
-    Rotation { center: DVec3, omega: f64 },
+    Rotation {
+        center: DVec3,
+        omega: f64,
+    },
     /// Enright et al. 2002 three-dimensional deformation, period T.
-    Enright { period: f64 },
+    Enright {
+        period: f64,
+    },
     /// Single vortex on the unit square (paper 004 Eq. 2), period T, no z component.
     /// The extracted text of Eq. (2) reads cos(2π x₁) / cos(2π x₀) in the last factors; that
     /// field is not divergence-free (∂v₀/∂x₀ + ∂v₁/∂x₁ = π cos(πt/T)(sin 2πx₁ cos 2πx₀ −
     /// sin 2πx₀ cos 2πx₁) ≠ 0), contradicting the volume conservation of Fig. 11. We use the
     /// standard divergence-free single vortex with sin(2π ·) factors, which the garbling fits.
-    Vortex { period: f64 },
+    Vortex {
+        period: f64,
+    },
 }
 
 impl AnalyticVelocity {
@@ -105,7 +112,10 @@ mod tests {
                     (s * 0.732).fract(),
                 );
                 // Truncation of the central difference is ~1e-7 for these O(10) derivatives.
-                assert!(divergence(f, x, 0.3 * s / 200.0).abs() < 1e-6, "{f:?} at {x}");
+                assert!(
+                    divergence(f, x, 0.3 * s / 200.0).abs() < 1e-6,
+                    "{f:?} at {x}"
+                );
                 assert!(f.velocity(x, 0.0).length() <= bound + 1e-12);
             }
         }

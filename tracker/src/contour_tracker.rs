@@ -119,7 +119,7 @@ impl PhaseSampler for Departure<'_> {
             self.bad.store(true, Ordering::Relaxed);
             return (0.0, 0);
         }
-        let n = self.previous.query(x0.clamp(self.lo, self.hi));
+        let n = self.previous.query_curved(x0.clamp(self.lo, self.hi));
         (n.distance, n.phase)
     }
 }

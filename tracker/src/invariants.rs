@@ -14,7 +14,9 @@ pub enum InvariantError {
     #[error("mesh has {triangles} triangles but {labels} label pairs")]
     LabelCount { triangles: usize, labels: usize },
     /// A triangle refers to a vertex that does not exist.
-    #[error("triangle {triangle} refers to vertex {index}, but the mesh has {vertex_count} vertices")]
+    #[error(
+        "triangle {triangle} refers to vertex {index}, but the mesh has {vertex_count} vertices"
+    )]
     IndexOutOfRange {
         triangle: usize,
         index: u32,
@@ -213,15 +215,26 @@ mod tests {
     #[test]
     fn flipped_labels_fail() {
         let mut m = cube();
-        let t = m.labels.iter().position(|l| l[0] != OUTSIDE && l[1] != OUTSIDE).unwrap();
+        let t = m
+            .labels
+            .iter()
+            .position(|l| l[0] != OUTSIDE && l[1] != OUTSIDE)
+            .unwrap();
         m.labels[t].swap(0, 1);
-        assert!(matches!(check(&m, 1e-12), Err(InvariantError::Inconsistent { .. })));
+        assert!(matches!(
+            check(&m, 1e-12),
+            Err(InvariantError::Inconsistent { .. })
+        ));
     }
 
     #[test]
     fn relabelled_triangle_fails() {
         let mut m = cube();
-        let t = m.labels.iter().position(|l| l[0] != OUTSIDE && l[1] != OUTSIDE).unwrap();
+        let t = m
+            .labels
+            .iter()
+            .position(|l| l[0] != OUTSIDE && l[1] != OUTSIDE)
+            .unwrap();
         m.labels[t] = [2, 0];
         // Phase 1 loses a half-face and phase 2 gains an unmatched one; phases are checked in
         // ascending order.
@@ -237,7 +250,10 @@ mod tests {
         m.triangles.remove(5);
         m.labels.remove(5);
         // The quad's other triangle keeps the diagonal to itself: an open edge.
-        assert!(matches!(check(&m, 1e-12), Err(InvariantError::OpenEdge { .. })));
+        assert!(matches!(
+            check(&m, 1e-12),
+            Err(InvariantError::OpenEdge { .. })
+        ));
     }
 
     #[test]
@@ -265,7 +281,11 @@ mod tests {
         m.labels[7] = [1, 1];
         assert!(matches!(
             check(&m, 1e-12),
-            Err(InvariantError::EqualLabels { triangle: 7, phase: 1, .. })
+            Err(InvariantError::EqualLabels {
+                triangle: 7,
+                phase: 1,
+                ..
+            })
         ));
     }
 
@@ -275,7 +295,11 @@ mod tests {
         m.triangles[2][1] = 10_000;
         assert!(matches!(
             check(&m, 1e-12),
-            Err(InvariantError::IndexOutOfRange { triangle: 2, index: 10_000, .. })
+            Err(InvariantError::IndexOutOfRange {
+                triangle: 2,
+                index: 10_000,
+                ..
+            })
         ));
         let mut m = cube();
         m.vertices[4].y = f64::NAN;
@@ -285,6 +309,9 @@ mod tests {
         ));
         let mut m = cube();
         m.labels.pop();
-        assert!(matches!(check(&m, 1e-12), Err(InvariantError::LabelCount { .. })));
+        assert!(matches!(
+            check(&m, 1e-12),
+            Err(InvariantError::LabelCount { .. })
+        ));
     }
 }

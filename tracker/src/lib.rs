@@ -16,6 +16,6 @@ pub use contour_tracker::ContourTracker;
 pub use invariants::InvariantError;
 pub use mesh::LabeledMesh;
 pub use ply::{read_ply, write_ply, PlyError};
+pub use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField, OUTSIDE};
 pub use query::{MeshQuery, Nearest};
 pub use tracker::{InterfaceTracker, StepStats, TrackerError};
-pub use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField, OUTSIDE};

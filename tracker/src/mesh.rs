@@ -147,12 +147,19 @@ mod tests {
                 .map(|t| mesh.normal(t).dot(mesh.corners(t)[0]).abs())
                 .fold(f64::INFINITY, f64::min);
             let lower = 4.0 / 3.0 * PI * rho.powi(3);
-            assert!(v[1] <= exact && v[1] >= lower, "level {level}: {} not in [{lower}, {exact}]", v[1]);
+            assert!(
+                v[1] <= exact && v[1] >= lower,
+                "level {level}: {} not in [{lower}, {exact}]",
+                v[1]
+            );
             // Outer phase (0) is closed only by the sphere itself: it gets the negative volume.
             assert!((v[0] + v[1]).abs() < 1e-12 * exact, "{v:?}");
             let err = exact - v[1];
             // Each subdivision roughly quarters the sagitta, so the error must shrink.
-            assert!(err < last_err, "level {level}: error {err} did not decrease");
+            assert!(
+                err < last_err,
+                "level {level}: error {err} did not decrease"
+            );
             last_err = err;
         }
         // Level 4 (5120 faces): the polyhedral volume error is ~ 3 * sagitta / r ~ 0.2 %.
@@ -169,6 +176,9 @@ mod tests {
         let v = m.phase_volumes(3);
         let va = a.phase_volumes(2)[1];
         // Same polyhedron translated: volumes agree to rounding of the tetra sums.
-        assert!((v[1] - va).abs() < 1e-12 && (v[2] - va).abs() < 1e-12, "{v:?}");
+        assert!(
+            (v[1] - va).abs() < 1e-12 && (v[2] - va).abs() < 1e-12,
+            "{v:?}"
+        );
     }
 }

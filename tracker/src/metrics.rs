@@ -39,10 +39,7 @@ fn samples(mesh: &LabeledMesh) -> Vec<DVec3> {
     let interface: Vec<usize> = (0..mesh.triangle_count())
         .filter(|&t| !mesh.labels[t].contains(&OUTSIDE))
         .collect();
-    let mut verts: Vec<u32> = interface
-        .iter()
-        .flat_map(|&t| mesh.triangles[t])
-        .collect();
+    let mut verts: Vec<u32> = interface.iter().flat_map(|&t| mesh.triangles[t]).collect();
     verts.sort_unstable();
     verts.dedup();
     let mut edges: Vec<(u32, u32)> = interface
@@ -106,7 +103,10 @@ mod tests {
         let m = icosphere(DVec3::ZERO, 1.0, 2, 1, 0);
         // The samples lie on the other mesh: only rounding of midpoints/centroids remains.
         assert!(hausdorff(&m, &m) < 1e-14);
-        assert_eq!(hausdorff(&LabeledMesh::default(), &LabeledMesh::default()), 0.0);
+        assert_eq!(
+            hausdorff(&LabeledMesh::default(), &LabeledMesh::default()),
+            0.0
+        );
         assert_eq!(hausdorff(&m, &LabeledMesh::default()), f64::INFINITY);
     }
 }

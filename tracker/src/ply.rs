@@ -9,8 +9,16 @@ use std::io::{self, BufWriter, Read, Write};
 use thiserror::Error;
 
 /// Header lines before the element counts and between them; other tools depend on this text.
-const HEADER_START: [&str; 3] = ["ply", "format binary_little_endian 1.0", "comment polyphase labeled mesh"];
-const VERTEX_PROPS: [&str; 3] = ["property double x", "property double y", "property double z"];
+const HEADER_START: [&str; 3] = [
+    "ply",
+    "format binary_little_endian 1.0",
+    "comment polyphase labeled mesh",
+];
+const VERTEX_PROPS: [&str; 3] = [
+    "property double x",
+    "property double y",
+    "property double z",
+];
 const FACE_PROPS: [&str; 3] = [
     "property list uchar uint vertex_indices",
     "property ushort front",
@@ -60,7 +68,11 @@ pub enum PlyError {
 pub fn write_ply<W: Write>(mesh: &LabeledMesh, w: W) -> io::Result<()> {
     let mut w = BufWriter::new(w);
     let [l0, l1, l2] = HEADER_START;
-    writeln!(w, "{l0}\n{l1}\n{l2}\nelement vertex {}", mesh.vertices.len())?;
+    writeln!(
+        w,
+        "{l0}\n{l1}\n{l2}\nelement vertex {}",
+        mesh.vertices.len()
+    )?;
     for line in VERTEX_PROPS {
         writeln!(w, "{line}")?;
     }
@@ -248,7 +260,10 @@ mod tests {
         assert!(data.starts_with(header.as_bytes()));
         let expected_len = data.len() - 24 * m.vertices.len() - FACE_BYTES * m.triangles.len();
         let text = std::str::from_utf8(&data[..expected_len]).unwrap();
-        assert!(text.ends_with("property ushort back\nend_header\n"), "{text}");
+        assert!(
+            text.ends_with("property ushort back\nend_header\n"),
+            "{text}"
+        );
     }
 
     #[test]
@@ -268,7 +283,10 @@ mod tests {
         }
         let mut longer = data.clone();
         longer.push(0);
-        assert!(matches!(read_ply(longer.as_slice()), Err(PlyError::TrailingData)));
+        assert!(matches!(
+            read_ply(longer.as_slice()),
+            Err(PlyError::TrailingData)
+        ));
     }
 
     #[test]
@@ -301,14 +319,27 @@ mod tests {
         let face = data.len() - FACE_BYTES;
         data[face + 5] = 9;
         let err = read_ply(data.as_slice()).unwrap_err();
-        assert!(matches!(err, PlyError::IndexOutOfRange { face: 0, index: 9, .. }));
+        assert!(matches!(
+            err,
+            PlyError::IndexOutOfRange {
+                face: 0,
+                index: 9,
+                ..
+            }
+        ));
         assert!(err.to_string().contains("vertex 9"), "{err}");
         data[face + 5] = 1;
         data[face] = 4;
-        assert!(matches!(read_ply(data.as_slice()), Err(PlyError::NotTriangle { count: 4, .. })));
+        assert!(matches!(
+            read_ply(data.as_slice()),
+            Err(PlyError::NotTriangle { count: 4, .. })
+        ));
         data[face] = 3;
         let first = face - 72;
         data[first..first + 8].copy_from_slice(&f64::NAN.to_le_bytes());
-        assert!(matches!(read_ply(data.as_slice()), Err(PlyError::NonFinite { vertex: 0, .. })));
+        assert!(matches!(
+            read_ply(data.as_slice()),
+            Err(PlyError::NonFinite { vertex: 0, .. })
+        ));
     }
 }

@@ -72,15 +72,25 @@ impl MeshQuery {
     /// the label count differs (meshes from [`crate::ply::read_ply`] and trackers satisfy
     /// [`crate::invariants::check`]).
     pub fn new(mesh: &LabeledMesh, background: PhaseId) -> MeshQuery {
-        assert_eq!(mesh.labels.len(), mesh.triangles.len(), "one label pair per triangle");
+        assert_eq!(
+            mesh.labels.len(),
+            mesh.triangles.len(),
+            "one label pair per triangle"
+        );
         let interface: Vec<u32> = (0..mesh.triangles.len() as u32)
             .filter(|&t| !mesh.labels[t as usize].contains(&OUTSIDE))
             .collect();
-        let input_corners: Vec<[DVec3; 3]> =
-            interface.iter().map(|&t| mesh.corners(t as usize)).collect();
+        let input_corners: Vec<[DVec3; 3]> = interface
+            .iter()
+            .map(|&t| mesh.corners(t as usize))
+            .collect();
         let mut bvh = Bvh::build(&input_corners);
         let source: Vec<u32> = bvh.order.iter().map(|&i| interface[i as usize]).collect();
-        let corners: Vec<[DVec3; 3]> = bvh.order.iter().map(|&i| input_corners[i as usize]).collect();
+        let corners: Vec<[DVec3; 3]> = bvh
+            .order
+            .iter()
+            .map(|&i| input_corners[i as usize])
+            .collect();
         bvh.order = Vec::new();
         let normals: Vec<DVec3> = corners
             .iter()
@@ -116,7 +126,7 @@ impl MeshQuery {
     /// Distance and phase at `x`, exact up to floating-point rounding.
     pub fn query(&self, x: DVec3) -> Nearest {
         self.locate(x, f64::INFINITY)
-            .map(|(n, _)| n)
+            .map(|(n, _, _)| n)
             .unwrap_or(Nearest {
                 distance: f64::INFINITY,
                 phase: self.background,
@@ -128,7 +138,8 @@ impl MeshQuery {
     /// of `x` (`None` otherwise). Much cheaper far from the interface, where the tree prunes
     /// almost everything: suits "is φ below a threshold" tests.
     pub fn query_within(&self, x: DVec3, max_distance: f64) -> Option<Nearest> {
-        self.locate(x, max_distance * max_distance).map(|(n, _)| n)
+        self.locate(x, max_distance * max_distance)
+            .map(|(n, _, _)| n)
     }
 
     /// Unsigned distance from `x` to the nearest interface point (infinite without interfaces).
@@ -158,11 +169,74 @@ impl MeshQuery {
         }
     }
 
+    /// Like [`MeshQuery::query`], but against the curved surface the mesh approximates: each
+    /// interface triangle is bulged by the Phong-tessellation offset with α = ½,
+    /// `δ(y) = ½ Σᵢ bᵢ ((vᵢ − y)·mᵢ) mᵢ` (bᵢ barycentric, mᵢ the corner's smooth normal), which
+    /// reproduces the sagitta of a circle through the corners to second order. The
+    /// semi-Lagrangian step samples the previous mesh at points that are not its vertices;
+    /// against flat facets every resampling would cut the chord sagitta, ~h²/(8R), off convex
+    /// regions (and add it to concave ones), a volume drift of O((h/R)²) per step that the
+    /// paper's text does not address. Corners whose smooth normal is more than 25° from the
+    /// facet's (sharp features, junction lines) keep the flat facet there, so features stay sharp.
+    pub fn query_curved(&self, x: DVec3) -> Nearest {
+        let Some((n, _, t)) = self.locate(x, f64::INFINITY) else {
+            return self.query(x);
+        };
+        let [front, back] = self.labels[t];
+        let signed = if n.phase == front {
+            n.distance
+        } else if n.phase == back {
+            -n.distance
+        } else {
+            return n;
+        };
+        let normal = self.tris[t].normal;
+        let bulge = self.bulge(t, n.point);
+        let curved = signed - bulge;
+        Nearest {
+            distance: curved.abs(),
+            phase: if curved > 0.0 { front } else { back },
+            point: n.point + bulge * normal,
+        }
+    }
+
+    /// The Phong offset (α = ½) of the point `y` of tree triangle `t`, along its normal.
+    fn bulge(&self, t: usize, y: DVec3) -> f64 {
+        /// cos 25°: beyond this a corner is a feature and contributes no bulge.
+        const SMOOTH_COS: f64 = 0.906_307_787_036_649_9;
+        let Tri { corners, normal } = self.tris[t];
+        let [a, b, c] = corners;
+        let area = (b - a).cross(c - a).dot(normal);
+        if area <= 0.0 {
+            return 0.0;
+        }
+        let bary = [
+            (b - y).cross(c - y).dot(normal) / area,
+            (c - y).cross(a - y).dot(normal) / area,
+            (a - y).cross(b - y).dot(normal) / area,
+        ];
+        let back = self.labels[t][1];
+        let mut offset = DVec3::ZERO;
+        for (k, &v) in self.triangles[t].iter().enumerate() {
+            let smooth = self
+                .pseudonormals
+                .of(v)
+                .iter()
+                .find(|(p, _)| *p == back)
+                .map_or(normal, |&(_, m)| m);
+            if smooth.dot(normal) < SMOOTH_COS {
+                continue;
+            }
+            offset += bary[k].clamp(0.0, 1.0) * (corners[k] - y).dot(smooth) * smooth;
+        }
+        0.5 * offset.dot(normal)
+    }
+
     /// Nearest point within squared distance `bound2` and its feature, with the indicator.
     /// Among triangles at exactly the same distance the lowest tree index wins, so the answer
     /// does not depend on the visiting order; the phase is then decided by the shared
     /// edge or vertex tables, never by which of the incident triangles was found.
-    pub(crate) fn locate(&self, x: DVec3, bound2: f64) -> Option<(Nearest, Feature)> {
+    pub(crate) fn locate(&self, x: DVec3, bound2: f64) -> Option<(Nearest, Feature, usize)> {
         let mut best: Option<(usize, DVec3, Region)> = None;
         let d2 = self.bvh.nearest(x, bound2, |i, bound2| {
             let Tri {
@@ -176,9 +250,7 @@ impl MeshQuery {
             }
             let (y, region) = closest_point(x, a, b, c);
             let d2 = (x - y).length_squared();
-            let better = d2 < bound2
-                || (d2 == bound2 && best.is_some_and(|(j, _, _)| i < j))
-                || (d2 == bound2 && best.is_none());
+            let better = d2 < bound2 || (d2 == bound2 && best.is_none_or(|(j, _, _)| i < j));
             if better {
                 best = Some((i, y, region));
                 d2
@@ -212,7 +284,10 @@ impl MeshQuery {
                         chosen = (s, e_s);
                     }
                 }
-                let (u, v) = (self.triangles[t][k as usize], self.triangles[t][(k as usize + 1) % 3]);
+                let (u, v) = (
+                    self.triangles[t][k as usize],
+                    self.triangles[t][(k as usize + 1) % 3],
+                );
                 (side(chosen.0, chosen.1), Feature::Edge(u.min(v), u.max(v)))
             }
             Region::Vertex(k) => {
@@ -236,6 +311,7 @@ impl MeshQuery {
                 point: y,
             },
             feature,
+            t,
         ))
     }
 }
@@ -245,6 +321,9 @@ mod tests {
     use super::*;
     use crate::invariants::check;
     use crate::mesh::fixtures::{icosphere, lattice_mesh, push_oriented, Rng};
+
+    /// Cells per axis and the phase of each cell.
+    type LatticeCase = (usize, fn(usize, usize, usize) -> PhaseId);
 
     fn assert_send_sync<T: Send + Sync>() {}
 
@@ -263,7 +342,12 @@ mod tests {
     /// A tetrahedron `[a, b, c, d]` cut through `c`, `d` and the midpoint of `ab` into phase 1
     /// (the half at `a`) and phase 2 (at `b`) inside phase 0. Edge `cd` is a triple line; `c`
     /// and `d` are non-manifold vertices at convex corners.
-    fn split_tet(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> (LabeledMesh, impl Fn(DVec3) -> PhaseId) {
+    fn split_tet(
+        a: DVec3,
+        b: DVec3,
+        c: DVec3,
+        d: DVec3,
+    ) -> (LabeledMesh, impl Fn(DVec3) -> PhaseId) {
         let m = 0.5 * (a + b);
         let mut mesh = LabeledMesh {
             vertices: vec![a, b, c, d, m],
@@ -309,7 +393,10 @@ mod tests {
     }
 
     /// Phase of a point in the lattice configuration `phase` on `n³` cells of the unit cube.
-    fn lattice_phase(n: usize, phase: impl Fn(usize, usize, usize) -> PhaseId) -> impl Fn(DVec3) -> PhaseId {
+    fn lattice_phase(
+        n: usize,
+        phase: impl Fn(usize, usize, usize) -> PhaseId,
+    ) -> impl Fn(DVec3) -> PhaseId {
         move |x: DVec3| {
             let c = |v: f64| ((v * n as f64).floor() as usize).min(n - 1);
             phase(c(x.x), c(x.y), c(x.z))
@@ -318,7 +405,14 @@ mod tests {
 
     /// Random points: uniform in `[lo, hi]` plus clusters of radius `r` around every vertex
     /// and edge midpoint of the interface, where edge and vertex cases occur.
-    fn probe_points(mesh: &LabeledMesh, lo: DVec3, hi: DVec3, r: f64, per: usize, seed: u64) -> Vec<DVec3> {
+    fn probe_points(
+        mesh: &LabeledMesh,
+        lo: DVec3,
+        hi: DVec3,
+        r: f64,
+        per: usize,
+        seed: u64,
+    ) -> Vec<DVec3> {
         let mut rng = Rng(seed);
         let mut pts: Vec<DVec3> = (0..2000).map(|_| rng.point(lo, hi)).collect();
         let mut anchors = Vec::new();
@@ -350,11 +444,16 @@ mod tests {
         let q = MeshQuery::new(mesh, 0);
         let mut cases = [0; 3];
         for &x in points {
-            let (n, feature) = q.locate(x, f64::INFINITY).unwrap();
+            let (n, feature, _) = q.locate(x, f64::INFINITY).unwrap();
             if n.distance <= 1e-6 {
                 continue;
             }
-            assert_eq!(n.phase, truth(x), "x = {x}, feature {feature:?}, distance {}", n.distance);
+            assert_eq!(
+                n.phase,
+                truth(x),
+                "x = {x}, feature {feature:?}, distance {}",
+                n.distance
+            );
             cases[match feature {
                 Feature::Face(_) => 0,
                 Feature::Edge(..) => 1,
@@ -371,7 +470,12 @@ mod tests {
 
     #[test]
     fn distance_matches_brute_force() {
-        let (tet, _) = split_tet(DVec3::ZERO, DVec3::X, DVec3::new(0.3, 0.9, 0.1), DVec3::new(0.4, 0.2, 0.7));
+        let (tet, _) = split_tet(
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::new(0.3, 0.9, 0.1),
+            DVec3::new(0.4, 0.2, 0.7),
+        );
         let meshes = [
             icosphere(DVec3::new(0.1, 0.2, 0.3), 0.8, 3, 1, 0),
             lattice_mesh(4, |i, j, k| ((i * 7 + j * 3 + k * 5) % 3) as PhaseId),
@@ -395,6 +499,26 @@ mod tests {
     }
 
     #[test]
+    fn build_is_thread_count_independent() {
+        // Large enough (> PARALLEL_MIN triangles) for the parallel tree build to split.
+        let mesh = icosphere(DVec3::ZERO, 1.0, 4, 1, 0);
+        let build = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| MeshQuery::new(&mesh, 0))
+        };
+        let (one, two) = (build(1), build(2));
+        assert_eq!(one.source, two.source);
+        let mut rng = Rng(11);
+        for _ in 0..500 {
+            let x = rng.point(DVec3::splat(-1.2), DVec3::splat(1.2));
+            assert_eq!(one.locate(x, f64::INFINITY), two.locate(x, f64::INFINITY));
+        }
+    }
+
+    #[test]
     fn bounded_query_agrees() {
         let mesh = icosphere(DVec3::ZERO, 1.0, 2, 1, 0);
         let q = MeshQuery::new(&mesh, 0);
@@ -406,6 +530,31 @@ mod tests {
                 Some(n) => assert_eq!(n, full),
                 None => assert!(full.distance > 0.3),
             }
+        }
+    }
+
+    #[test]
+    fn degenerate_triangles_give_finite_answers() {
+        // A sliver fan: one triangle of zero area, one of area ~1e-300, around a shared edge.
+        let mesh = LabeledMesh {
+            vertices: vec![
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::new(0.5, 0.0, 0.0),
+                DVec3::new(0.5, 1e-300, 0.0),
+                DVec3::new(0.5, 1.0, 0.0),
+            ],
+            triangles: vec![[0, 1, 2], [0, 1, 3], [0, 1, 4]],
+            labels: vec![[1, 0], [1, 0], [1, 0]],
+        };
+        let q = MeshQuery::new(&mesh, 0);
+        let mut rng = Rng(5);
+        for _ in 0..2000 {
+            let x = rng.point(DVec3::splat(-1.0), DVec3::splat(2.0));
+            let n = q.query(x);
+            assert!(n.distance.is_finite() && n.point.is_finite(), "{x}: {n:?}");
+            assert!(n.phase <= 1);
+            assert_eq!(n.distance, brute_distance(&mesh, x));
         }
     }
 
@@ -431,7 +580,7 @@ mod tests {
 
     #[test]
     fn indicator_slabs_quadrants_and_triple_lines() {
-        let configs: [(usize, fn(usize, usize, usize) -> PhaseId); 3] = [
+        let configs: [LatticeCase; 3] = [
             (3, |i, _, _| i as PhaseId),
             (2, |i, j, _| (i + 2 * j) as PhaseId),
             (2, |i, j, _| if i == 0 { 0 } else { 1 + j as PhaseId }),
@@ -446,13 +595,15 @@ mod tests {
 
     #[test]
     fn indicator_at_box_corners_and_staircases() {
-        let configs: [(usize, fn(usize, usize, usize) -> PhaseId); 3] = [
+        let configs: [LatticeCase; 3] = [
             // A cube inside another phase: convex corners and edges.
             (3, |i, j, k| PhaseId::from(i == 1 && j == 1 && k == 1)),
             // A staircase: convex, reflex and saddle vertices.
             (4, |i, j, k| PhaseId::from(i + j + k <= 3)),
             // Three phases scattered: non-manifold edges and vertices, pinched regions.
-            (4, |i, j, k| ((i * 7 + j * 3 + k * 5 + i * j) % 3) as PhaseId),
+            (4, |i, j, k| {
+                ((i * 7 + j * 3 + k * 5 + i * j) % 3) as PhaseId
+            }),
         ];
         let mut total = [0; 3];
         for (seed, (n, f)) in configs.into_iter().enumerate() {
@@ -471,9 +622,19 @@ mod tests {
     #[test]
     fn indicator_at_non_manifold_vertices_and_edges() {
         let tets = [
-            (DVec3::ZERO, DVec3::X, DVec3::new(0.3, 0.9, 0.1), DVec3::new(0.4, 0.2, 0.7)),
+            (
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::new(0.3, 0.9, 0.1),
+                DVec3::new(0.4, 0.2, 0.7),
+            ),
             // Flat and sharp: small dihedral angles along the triple line.
-            (DVec3::ZERO, DVec3::new(1.0, 0.1, 0.0), DVec3::new(0.6, 0.05, 0.08), DVec3::new(0.5, 0.9, 0.02)),
+            (
+                DVec3::ZERO,
+                DVec3::new(1.0, 0.1, 0.0),
+                DVec3::new(0.6, 0.05, 0.08),
+                DVec3::new(0.5, 0.9, 0.02),
+            ),
         ];
         for (seed, (a, b, c, d)) in tets.into_iter().enumerate() {
             let (mesh, truth) = split_tet(a, b, c, d);
@@ -481,7 +642,14 @@ mod tests {
             let q = MeshQuery::new(&mesh, 0);
             // Vertices c and d carry one pseudonormal per phase.
             assert_eq!(q.pseudonormals.of(2).len(), 3);
-            let pts = probe_points(&mesh, DVec3::splat(-1.0), DVec3::splat(2.0), 0.1, 200, 20 + seed as u64);
+            let pts = probe_points(
+                &mesh,
+                DVec3::splat(-1.0),
+                DVec3::splat(2.0),
+                0.1,
+                200,
+                20 + seed as u64,
+            );
             let cases = check_indicator(&mesh, truth, &pts);
             assert!(cases[1] > 100 && cases[2] > 100, "{cases:?}");
         }

@@ -9,7 +9,10 @@ use std::collections::BTreeMap;
 /// (two triangles) between every pair of face-neighbouring cells of different phases, and
 /// `OUTSIDE` quads on the cube boundary. Vertices are the shared lattice points, so the mesh is
 /// closed and label-consistent by construction (non-manifold where three or more phases meet).
-pub(crate) fn lattice_mesh(n: usize, phase: impl Fn(usize, usize, usize) -> PhaseId) -> LabeledMesh {
+pub(crate) fn lattice_mesh(
+    n: usize,
+    phase: impl Fn(usize, usize, usize) -> PhaseId,
+) -> LabeledMesh {
     let m = n + 1;
     let mut mesh = LabeledMesh::default();
     for k in 0..m {

@@ -3,6 +3,7 @@
 
 use glam::DVec3;
 use polyphase_grid::PhaseId;
+use rayon::prelude::*;
 
 /// Undirected edges of the triangles, with the triangles around each.
 #[derive(Clone, Debug, Default)]
@@ -24,7 +25,8 @@ impl Edges {
                 records.push((u.min(v), u.max(v), t as u32, k as u8));
             }
         }
-        records.sort_unstable();
+        // Keys are unique (triangle and corner included): the order is thread-independent.
+        records.par_sort_unstable();
         let mut edges = Edges {
             tri_edges: vec![[0; 3]; triangles.len()],
             offsets: Vec::with_capacity(records.len() / 2 + 1),
@@ -61,7 +63,9 @@ pub(crate) struct Pseudonormals {
 
 impl Pseudonormals {
     /// Builds the table for `n_vertices` vertices from triangles, their corner positions,
-    /// unit normals and `[front, back]` labels. Sums run in (vertex, phase, triangle) order.
+    /// unit normals and `[front, back]` labels. Corners are bucketed by vertex (counting sort,
+    /// O(N)), then each vertex sums its contributions in (phase, triangle) order, in parallel
+    /// over vertices: the result does not depend on the thread count.
     pub(crate) fn build(
         n_vertices: usize,
         triangles: &[[u32; 3]],
@@ -69,36 +73,59 @@ impl Pseudonormals {
         normals: &[DVec3],
         labels: &[[PhaseId; 2]],
     ) -> Pseudonormals {
-        let mut records: Vec<(u32, PhaseId, u32, DVec3)> = Vec::with_capacity(triangles.len() * 6);
-        for (t, tri) in triangles.iter().enumerate() {
-            let p = &corners[t];
-            for k in 0..3 {
-                let e1 = p[(k + 1) % 3] - p[k];
-                let e2 = p[(k + 2) % 3] - p[k];
-                // atan2 of |cross| and dot is accurate for all angles and finite for zero edges.
-                let angle = e1.cross(e2).length().atan2(e1.dot(e2));
-                let w = angle * normals[t];
-                records.push((tri[k], labels[t][1], t as u32, w));
-                records.push((tri[k], labels[t][0], t as u32, -w));
+        // Corner c = 3 t + k, bucketed by its vertex.
+        let mut start = vec![0u32; n_vertices + 1];
+        for tri in triangles {
+            for &v in tri {
+                start[v as usize + 1] += 1;
             }
         }
-        records.sort_unstable_by(|a, b| (a.0, a.1, a.2).cmp(&(b.0, b.1, b.2)));
+        for v in 0..n_vertices {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut bucket = vec![0u32; triangles.len() * 3];
+        for (t, tri) in triangles.iter().enumerate() {
+            for (k, &v) in tri.iter().enumerate() {
+                bucket[fill[v as usize] as usize] = (3 * t + k) as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        let per_vertex: Vec<Vec<(PhaseId, DVec3)>> = (0..n_vertices)
+            .into_par_iter()
+            .map(|v| {
+                let mut contrib: Vec<(PhaseId, u32, DVec3)> = Vec::new();
+                for &c in &bucket[start[v] as usize..start[v + 1] as usize] {
+                    let (t, k) = (c as usize / 3, c as usize % 3);
+                    let p = &corners[t];
+                    let e1 = p[(k + 1) % 3] - p[k];
+                    let e2 = p[(k + 2) % 3] - p[k];
+                    // atan2 of |cross| and dot: accurate for all angles, finite for zero edges.
+                    let w = e1.cross(e2).length().atan2(e1.dot(e2)) * normals[t];
+                    contrib.push((labels[t][1], t as u32, w));
+                    contrib.push((labels[t][0], t as u32, -w));
+                }
+                contrib.sort_unstable_by_key(|&(phase, t, _)| (phase, t));
+                let mut out: Vec<(PhaseId, DVec3)> = Vec::new();
+                for (phase, _, w) in contrib {
+                    match out.last_mut() {
+                        Some((p, sum)) if *p == phase => *sum += w,
+                        _ => out.push((phase, w)),
+                    }
+                }
+                for (_, n) in &mut out {
+                    *n = n.normalize_or_zero();
+                }
+                out
+            })
+            .collect();
         let mut table = Pseudonormals {
             offsets: Vec::with_capacity(n_vertices + 1),
-            entries: Vec::new(),
+            entries: Vec::with_capacity(triangles.len() * 2),
         };
-        let mut r = 0;
-        for v in 0..n_vertices as u32 {
+        for list in per_vertex {
             table.offsets.push(table.entries.len() as u32);
-            while r < records.len() && records[r].0 == v {
-                let phase = records[r].1;
-                let mut sum = DVec3::ZERO;
-                while r < records.len() && records[r].0 == v && records[r].1 == phase {
-                    sum += records[r].3;
-                    r += 1;
-                }
-                table.entries.push((phase, sum.normalize_or_zero()));
-            }
+            table.entries.extend(list);
         }
         table.offsets.push(table.entries.len() as u32);
         table

@@ -1,12 +1,13 @@
 //! Axis-aligned bounding-box tree over triangles for exact nearest-point queries. Built top
 //! down: each node splits its triangles at the median centroid along the longest axis of the
 //! centroid bounds (ties broken by index, so the tree is a pure function of the input),
-//! O(N log N) with linear-time selection. Queries descend the nearer child first and prune
+//! O(N log N) with linear-time selection, halves split in parallel. Queries descend the nearer child first and prune
 //! every box farther than the best distance found so far. Boxes are stored in `f32`, rounded
 //! outwards (so they still contain their triangles), making a node 32 bytes and a pair of
 //! siblings one cache line: queries are bound by memory traffic, not arithmetic.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 /// Most triangles per leaf.
 const LEAF_SIZE: usize = 4;
@@ -69,63 +70,116 @@ fn box_centre(node: &Node) -> DVec3 {
     DVec3::new(c(0), c(1), c(2))
 }
 
+/// A triangle while building: bounds, centroid and input index.
+#[derive(Clone, Copy, Debug)]
+struct Prim {
+    lo: DVec3,
+    hi: DVec3,
+    centroid: DVec3,
+    id: u32,
+}
+
+/// Slices longer than this are split in parallel.
+const PARALLEL_MIN: usize = 4096;
+
+/// Reorders `prims` into tree order: the first half (by centroid along the longest axis of
+/// the centroid bounds, ties by index) before the second, recursively. The split position
+/// depends only on the length, so the tree's shape is implicit, and the result is the same
+/// whether the halves run in parallel or not.
+fn partition(prims: &mut [Prim]) {
+    if prims.len() <= LEAF_SIZE {
+        return;
+    }
+    let bounds = |ps: &[Prim]| {
+        ps.iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p.centroid), hi.max(p.centroid))
+            })
+    };
+    let (clo, chi) = if prims.len() > PARALLEL_MIN {
+        // min/max are exact, so the chunked reduction equals the serial one.
+        prims.par_chunks(PARALLEL_MIN).map(bounds).reduce(
+            || (DVec3::INFINITY, DVec3::NEG_INFINITY),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        )
+    } else {
+        bounds(prims)
+    };
+    let ext = chi - clo;
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    let mid = prims.len() / 2;
+    prims.select_nth_unstable_by(mid, |a, b| {
+        a.centroid[axis]
+            .total_cmp(&b.centroid[axis])
+            .then(a.id.cmp(&b.id))
+    });
+    let (left, right) = prims.split_at_mut(mid);
+    if left.len() > PARALLEL_MIN {
+        rayon::join(|| partition(left), || partition(right));
+    } else {
+        partition(left);
+        partition(right);
+    }
+}
+
 impl Bvh {
     /// Builds the tree over triangles given by their corner positions.
     pub(crate) fn build(tris: &[[DVec3; 3]]) -> Bvh {
         let n = tris.len();
+        let mut prims: Vec<Prim> = tris
+            .par_iter()
+            .enumerate()
+            .map(|(i, t)| Prim {
+                lo: t[0].min(t[1]).min(t[2]),
+                hi: t[0].max(t[1]).max(t[2]),
+                centroid: (t[0] + t[1] + t[2]) / 3.0,
+                id: i as u32,
+            })
+            .collect();
+        partition(&mut prims);
         let mut bvh = Bvh {
-            nodes: Vec::with_capacity(2 * n.div_ceil(LEAF_SIZE).max(1)),
-            order: (0..n as u32).collect(),
+            nodes: Vec::with_capacity(2 * n.div_ceil(LEAF_SIZE) + 2),
+            order: prims.iter().map(|p| p.id).collect(),
         };
-        if n == 0 {
-            return bvh;
-        }
-        let centroids: Vec<DVec3> = tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
-        // Root, then an unused slot so that every sibling pair starts at an even index.
-        bvh.nodes.push(Node::default());
-        bvh.nodes.push(Node::default());
-        // Explicit work list instead of recursion: (node, start, end).
-        let mut work = vec![(0usize, 0usize, n)];
-        while let Some((node, start, end)) = work.pop() {
-            let ids = &mut bvh.order[start..end];
-            let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-            let (mut clo, mut chi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-            for &i in ids.iter() {
-                let t = &tris[i as usize];
-                lo = lo.min(t[0]).min(t[1]).min(t[2]);
-                hi = hi.max(t[0]).max(t[1]).max(t[2]);
-                clo = clo.min(centroids[i as usize]);
-                chi = chi.max(centroids[i as usize]);
-            }
-            bvh.nodes[node].lo = [f32_down(lo.x), f32_down(lo.y), f32_down(lo.z)];
-            bvh.nodes[node].hi = [f32_up(hi.x), f32_up(hi.y), f32_up(hi.z)];
-            if end - start <= LEAF_SIZE {
-                bvh.nodes[node].first = start as u32;
-                bvh.nodes[node].count = (end - start) as u32;
-                continue;
-            }
-            let ext = chi - clo;
-            let axis = if ext.x >= ext.y && ext.x >= ext.z {
-                0
-            } else if ext.y >= ext.z {
-                1
-            } else {
-                2
-            };
-            let mid = (end - start) / 2;
-            ids.select_nth_unstable_by(mid, |&i, &j| {
-                let (ci, cj) = (centroids[i as usize][axis], centroids[j as usize][axis]);
-                ci.total_cmp(&cj).then(i.cmp(&j))
-            });
-            let left = bvh.nodes.len();
+        if n > 0 {
+            // Root, then an unused slot so that every sibling pair starts at an even index.
             bvh.nodes.push(Node::default());
             bvh.nodes.push(Node::default());
-            bvh.nodes[node].first = left as u32;
-            bvh.nodes[node].count = 0;
-            work.push((left + 1, start + mid, end));
-            work.push((left, start, start + mid));
+            bvh.emit(&prims, 0, 0, n);
         }
         bvh
+    }
+
+    /// Fills node `node` for tree-order triangles `start..end` (and its subtree, depth first;
+    /// recursion depth <= log2 N) and returns its `f64` bounds.
+    fn emit(&mut self, prims: &[Prim], node: usize, start: usize, end: usize) -> (DVec3, DVec3) {
+        let (lo, hi) = if end - start <= LEAF_SIZE {
+            self.nodes[node].first = start as u32;
+            self.nodes[node].count = (end - start) as u32;
+            prims[start..end]
+                .iter()
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(p.lo), hi.max(p.hi))
+                })
+        } else {
+            let left = self.nodes.len();
+            self.nodes.push(Node::default());
+            self.nodes.push(Node::default());
+            self.nodes[node].first = left as u32;
+            let mid = start + (end - start) / 2;
+            let (llo, lhi) = self.emit(prims, left, start, mid);
+            let (rlo, rhi) = self.emit(prims, left + 1, mid, end);
+            (llo.min(rlo), lhi.max(rhi))
+        };
+        self.nodes[node].lo = [f32_down(lo.x), f32_down(lo.y), f32_down(lo.z)];
+        self.nodes[node].hi = [f32_up(hi.x), f32_up(hi.y), f32_up(hi.z)];
+        (lo, hi)
     }
 
     /// Visits the leaves that may hold a triangle closer than the running bound, nearer boxes

@@ -108,13 +108,29 @@ mod tests {
     fn regions_of_a_right_triangle() {
         let (a, b, c) = (DVec3::ZERO, DVec3::X, DVec3::Y);
         let cases = [
-            (DVec3::new(0.2, 0.2, 1.0), DVec3::new(0.2, 0.2, 0.0), Region::Face),
+            (
+                DVec3::new(0.2, 0.2, 1.0),
+                DVec3::new(0.2, 0.2, 0.0),
+                Region::Face,
+            ),
             (DVec3::new(-1.0, -1.0, 0.5), a, Region::Vertex(0)),
             (DVec3::new(2.0, -0.5, 0.0), b, Region::Vertex(1)),
             (DVec3::new(-0.1, 3.0, 0.0), c, Region::Vertex(2)),
-            (DVec3::new(0.5, -1.0, 0.3), DVec3::new(0.5, 0.0, 0.0), Region::Edge(0)),
-            (DVec3::new(1.0, 1.0, -2.0), DVec3::new(0.5, 0.5, 0.0), Region::Edge(1)),
-            (DVec3::new(-1.0, 0.25, 0.0), DVec3::new(0.0, 0.25, 0.0), Region::Edge(2)),
+            (
+                DVec3::new(0.5, -1.0, 0.3),
+                DVec3::new(0.5, 0.0, 0.0),
+                Region::Edge(0),
+            ),
+            (
+                DVec3::new(1.0, 1.0, -2.0),
+                DVec3::new(0.5, 0.5, 0.0),
+                Region::Edge(1),
+            ),
+            (
+                DVec3::new(-1.0, 0.25, 0.0),
+                DVec3::new(0.0, 0.25, 0.0),
+                Region::Edge(2),
+            ),
         ];
         for (p, q, r) in cases {
             let (y, region) = closest_point(p, a, b, c);
@@ -136,7 +152,10 @@ mod tests {
             assert!(y.is_finite(), "{a} {b} {c}: {y}");
             // The closest point lies on the segment hull of the corners, so it can be no
             // farther than the nearest corner.
-            let nearest_corner = [a, b, c].iter().map(|v| v.distance(p)).fold(f64::INFINITY, f64::min);
+            let nearest_corner = [a, b, c]
+                .iter()
+                .map(|v| v.distance(p))
+                .fold(f64::INFINITY, f64::min);
             assert!(y.distance(p) <= nearest_corner + 1e-15, "{a} {b} {c}: {y}");
         }
     }

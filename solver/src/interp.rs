@@ -1,0 +1,179 @@
+//! Interpolation of one staggered velocity component at an arbitrary point: trilinear, or a
+//! tensor product of 1D monotone cubic Hermite interpolants (Fritsch–Carlson slope limiting),
+//! which never leaves the range of the samples it uses. Clamped at walls, wrapped when periodic.
+
+use crate::config::Interpolation;
+use crate::layout::{idx, Layout};
+use glam::DVec3;
+use polyphase_grid::GridSpec;
+
+/// Sample index along one axis: wrapped when periodic, clamped otherwise.
+#[inline]
+fn axis_index(i: isize, m: usize, periodic: bool) -> usize {
+    if periodic {
+        i.rem_euclid(m as isize) as usize
+    } else {
+        i.clamp(0, m as isize - 1) as usize
+    }
+}
+
+/// Base index and fraction along one axis for grid coordinate `g` over `m` samples.
+#[inline]
+fn axis_coord(g: f64, m: usize, periodic: bool) -> (isize, f64) {
+    if periodic {
+        let i0 = g.floor();
+        (i0 as isize, g - i0)
+    } else if m < 2 {
+        (0, 0.0)
+    } else {
+        let gc = g.clamp(0.0, (m - 1) as f64);
+        let i0 = gc.floor().min((m - 2) as f64);
+        (i0 as isize, gc - i0)
+    }
+}
+
+/// Monotone cubic Hermite through f[1]..f[2] at fraction t, slopes from neighbours, limited.
+#[inline]
+fn mono_cubic(f: [f64; 4], t: f64) -> f64 {
+    let delta = f[2] - f[1];
+    let mut d0 = 0.5 * (f[2] - f[0]);
+    let mut d1 = 0.5 * (f[3] - f[1]);
+    if delta == 0.0 {
+        d0 = 0.0;
+        d1 = 0.0;
+    } else {
+        if d0 * delta <= 0.0 {
+            d0 = 0.0;
+        }
+        if d1 * delta <= 0.0 {
+            d1 = 0.0;
+        }
+        let (a, b) = (d0 / delta, d1 / delta);
+        let s = a * a + b * b;
+        if s > 9.0 {
+            let tau = 3.0 / s.sqrt();
+            d0 *= tau;
+            d1 *= tau;
+        }
+    }
+    let t2 = t * t;
+    let t3 = t2 * t;
+    f[1] * (2.0 * t3 - 3.0 * t2 + 1.0)
+        + d0 * (t3 - 2.0 * t2 + t)
+        + f[2] * (3.0 * t2 - 2.0 * t3)
+        + d1 * (t3 - t2)
+}
+
+/// Grid coordinates of `x` in the sample lattice of component `a`, plus the sample counts.
+#[inline]
+fn lattice(spec: &GridSpec, layout: &Layout, a: usize, x: DVec3) -> ([f64; 3], [usize; 3]) {
+    let dims = layout.face_dims(a);
+    let q = (x - spec.origin) / spec.h;
+    let mut g = [q.x, q.y, q.z];
+    for (d, gd) in g.iter_mut().enumerate() {
+        if d != a {
+            *gd -= 0.5;
+        }
+    }
+    (g, dims)
+}
+
+/// Value of component `a` (samples `data`) at `x`.
+pub(crate) fn sample(
+    spec: &GridSpec,
+    layout: &Layout,
+    data: &[f64],
+    a: usize,
+    x: DVec3,
+    scheme: Interpolation,
+) -> f64 {
+    let (g, dims) = lattice(spec, layout, a, x);
+    let mut base = [0isize; 3];
+    let mut frac = [0.0; 3];
+    for d in 0..3 {
+        (base[d], frac[d]) = axis_coord(g[d], dims[d], layout.periodic[d]);
+    }
+    // Stencil reach below and above the base sample for this scheme.
+    let (lo, hi) = match scheme {
+        Interpolation::Trilinear => (0, 1),
+        Interpolation::MonotoneCubic => (1, 2),
+    };
+    let inside = (0..3).all(|d| base[d] >= lo && base[d] + hi < dims[d] as isize);
+    let (s1, s2) = (dims[0] as isize, (dims[0] * dims[1]) as isize);
+    let origin = base[0] + s1 * base[1] + s2 * base[2];
+    let at = |di: isize, dj: isize, dk: isize| {
+        if inside {
+            // No wrap or clamp anywhere in the stencil: plain strided access.
+            return data[(origin + di + s1 * dj + s2 * dk) as usize];
+        }
+        let p = [
+            axis_index(base[0] + di, dims[0], layout.periodic[0]),
+            axis_index(base[1] + dj, dims[1], layout.periodic[1]),
+            axis_index(base[2] + dk, dims[2], layout.periodic[2]),
+        ];
+        data[idx(dims, p)]
+    };
+    match scheme {
+        Interpolation::Trilinear => {
+            let mut s = 0.0;
+            for dk in 0..2 {
+                let wk = if dk == 0 { 1.0 - frac[2] } else { frac[2] };
+                for dj in 0..2 {
+                    let wj = if dj == 0 { 1.0 - frac[1] } else { frac[1] };
+                    for di in 0..2 {
+                        let wi = if di == 0 { 1.0 - frac[0] } else { frac[0] };
+                        s += wi * wj * wk * at(di, dj, dk);
+                    }
+                }
+            }
+            s
+        }
+        Interpolation::MonotoneCubic => {
+            let mut planes = [0.0; 4];
+            for (kk, plane) in planes.iter_mut().enumerate() {
+                let mut lines = [0.0; 4];
+                for (jj, line) in lines.iter_mut().enumerate() {
+                    let dj = jj as isize - 1;
+                    let dk = kk as isize - 1;
+                    let f = [at(-1, dj, dk), at(0, dj, dk), at(1, dj, dk), at(2, dj, dk)];
+                    *line = mono_cubic(f, frac[0]);
+                }
+                *plane = mono_cubic(lines, frac[1]);
+            }
+            mono_cubic(planes, frac[2])
+        }
+    }
+}
+
+/// Minimum and maximum of the eight trilinear samples of component `a` around `x`: the
+/// range a MacCormack-corrected value must stay in.
+pub(crate) fn stencil_range(
+    spec: &GridSpec,
+    layout: &Layout,
+    data: &[f64],
+    a: usize,
+    x: DVec3,
+) -> (f64, f64) {
+    let (g, dims) = lattice(spec, layout, a, x);
+    let mut base = [0isize; 3];
+    for d in 0..3 {
+        base[d] = axis_coord(g[d], dims[d], layout.periodic[d]).0;
+    }
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for dk in 0..2 {
+        for dj in 0..2 {
+            for di in 0..2 {
+                let p = [
+                    axis_index(base[0] + di, dims[0], layout.periodic[0]),
+                    axis_index(base[1] + dj, dims[1], layout.periodic[1]),
+                    axis_index(base[2] + dk, dims[2], layout.periodic[2]),
+                ];
+                let v = data[idx(dims, p)];
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+    }
+    (lo, hi)
+}

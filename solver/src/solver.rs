@@ -1,0 +1,277 @@
+//! The public solver: owns the MAC velocity and the static solid fractions, and advances them
+//! one step at a time (DESIGN.md "The solver"): advect, body forces, implicit viscosity,
+//! variable-density projection. A failed step leaves the state untouched.
+
+use crate::advect::advect;
+use crate::config::{AxisBoundary, SolverConfig};
+use crate::error::SolverError;
+use crate::layout::{unidx, Layout};
+use crate::linalg::pcg::SolveStats;
+use crate::linalg::vecops::first_non_finite;
+use crate::mac::MacGrid;
+use crate::phase::{cell_material, face_densities, PhaseProps};
+use crate::solid::open_fractions;
+use crate::{pressure, viscosity};
+use glam::DVec3;
+use polyphase_grid::{GridSpec, PhaseField};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Extra body acceleration (m/s²) beyond gravity: the hook for surface-tension, buoyancy
+/// models, stirring, or anything else a scene adds.
+pub trait BodyForce: Sync {
+    /// Acceleration at `x` and time `t`.
+    fn acceleration(&self, x: DVec3, t: f64) -> DVec3;
+}
+
+/// Wall-clock seconds spent per stage of a step (for stats; never affects results).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepTimings {
+    /// Velocity advection.
+    pub advection: f64,
+    /// Gravity and body forces.
+    pub forces: f64,
+    /// Implicit viscosity (assembly and solve).
+    pub viscosity: f64,
+    /// Pressure projection (assembly and solve).
+    pub pressure: f64,
+}
+
+/// What a step did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepReport {
+    /// The pressure solve.
+    pub pressure: SolveStats,
+    /// The viscosity solve; None when every phase is inviscid.
+    pub viscosity: Option<SolveStats>,
+    /// Time per stage.
+    pub timings: StepTimings,
+}
+
+/// The MAC-grid multiphase solver.
+#[derive(Clone, Debug)]
+pub struct Solver {
+    config: SolverConfig,
+    velocity: MacGrid,
+    open: [Vec<f64>; 3],
+    pressure: Vec<f64>,
+    time: f64,
+}
+
+impl Solver {
+    /// A solver at rest at time 0; checks the configuration and rasterises the solids.
+    pub fn new(config: SolverConfig) -> Result<Self, SolverError> {
+        config.validate()?;
+        let layout = Layout {
+            n: config.grid.dims,
+            periodic: config.boundaries.map(|b| b == AxisBoundary::Periodic),
+        };
+        let open = [0, 1, 2].map(|a| open_fractions(&config.grid, &layout, &config.solids, a));
+        let velocity = MacGrid::zeros(config.grid, layout, config.interpolation);
+        let pressure = vec![0.0; layout.cells()];
+        Ok(Self {
+            config,
+            velocity,
+            open,
+            pressure,
+            time: 0.0,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &SolverConfig {
+        &self.config
+    }
+
+    /// The cells (a [`PhaseField`] passed to [`Solver::step`] must be sampled on them).
+    pub fn grid(&self) -> &GridSpec {
+        &self.config.grid
+    }
+
+    /// The velocity; implements [`polyphase_grid::VelocityField`] for trackers.
+    pub fn velocity(&self) -> &MacGrid {
+        &self.velocity
+    }
+
+    /// Mutable velocity, for initial conditions.
+    pub fn velocity_mut(&mut self) -> &mut MacGrid {
+        &mut self.velocity
+    }
+
+    /// Pressure (Pa) at the cell centres from the last projection, zero mean per fluid region.
+    pub fn pressure(&self) -> &[f64] {
+        &self.pressure
+    }
+
+    /// Simulated time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Open (non-solid) fraction of each face of component `a`; 0 on domain walls.
+    pub fn open_fraction(&self, a: usize) -> &[f64] {
+        &self.open[a]
+    }
+
+    /// Discrete divergence (1/s) per cell of the current velocity.
+    pub fn divergence(&self) -> Vec<f64> {
+        pressure::divergence(&self.velocity, &self.open)
+    }
+
+    /// Largest stable-for-advection time step: cfl·h / (max|u| + √(h|g|)), the gravity term
+    /// anticipating the speed a step of free fall adds (Bridson's estimate). Viscosity is
+    /// implicit and adds no limit. Infinite for a fluid at rest without gravity.
+    pub fn cfl_dt(&self, cfl: f64) -> f64 {
+        let h = self.config.grid.h;
+        let speed = self.velocity.max_abs() + (h * self.config.gravity.length()).sqrt();
+        if speed > 0.0 {
+            cfl.max(0.0) * h / speed
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// Advances by `dt` with gravity only.
+    pub fn step(
+        &mut self,
+        field: &PhaseField,
+        phases: &[PhaseProps],
+        dt: f64,
+    ) -> Result<StepReport, SolverError> {
+        self.step_inner(field, phases, dt, None)
+    }
+
+    /// Advances by `dt` with gravity plus `force`.
+    pub fn step_with_force(
+        &mut self,
+        field: &PhaseField,
+        phases: &[PhaseProps],
+        dt: f64,
+        force: &dyn BodyForce,
+    ) -> Result<StepReport, SolverError> {
+        self.step_inner(field, phases, dt, Some(force))
+    }
+
+    /// Projects the current velocity only (initial conditions, tests); `dt` scales the
+    /// reported pressure.
+    pub fn project(
+        &mut self,
+        field: &PhaseField,
+        phases: &[PhaseProps],
+        dt: f64,
+    ) -> Result<SolveStats, SolverError> {
+        self.check_inputs(field, dt)?;
+        let material = cell_material(field, phases)?;
+        let mut vel = self.velocity.clone();
+        let rho = [0, 1, 2].map(|a| face_densities(&material, &vel.layout, a));
+        let out = pressure::project(&mut vel, &self.open, &rho, dt, &self.config.pressure)?;
+        self.velocity = vel;
+        self.pressure = out.pressure;
+        Ok(out.stats)
+    }
+
+    fn check_inputs(&self, field: &PhaseField, dt: f64) -> Result<(), SolverError> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(SolverError::InvalidTimeStep(dt));
+        }
+        if field.grid != self.config.grid {
+            return Err(SolverError::GridMismatch {
+                expected: format!("{:?}", self.config.grid),
+                found: format!("{:?}", field.grid),
+            });
+        }
+        for a in 0..3 {
+            if let Some(index) = first_non_finite(&self.velocity.comps[a]) {
+                return Err(SolverError::NonFinite {
+                    what: "velocity",
+                    index,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn step_inner(
+        &mut self,
+        field: &PhaseField,
+        phases: &[PhaseProps],
+        dt: f64,
+        force: Option<&dyn BodyForce>,
+    ) -> Result<StepReport, SolverError> {
+        self.check_inputs(field, dt)?;
+        let material = cell_material(field, phases)?;
+        let mut timings = StepTimings::default();
+        let open = &self.open;
+
+        let t0 = Instant::now();
+        let mut start = self.velocity.clone();
+        for (comp, op) in start.comps.iter_mut().zip(open) {
+            comp.par_iter_mut().zip(op).for_each(|(u, s)| {
+                if *s == 0.0 {
+                    *u = 0.0
+                }
+            });
+        }
+        let mut vel = advect(&start, open, dt, self.config.advection);
+        timings.advection = t0.elapsed().as_secs_f64();
+
+        let t1 = Instant::now();
+        let g = self.config.gravity;
+        let time = self.time;
+        for a in 0..3 {
+            let dims = vel.layout.face_dims(a);
+            let positions = &start;
+            vel.comps[a].par_iter_mut().enumerate().for_each(|(f, u)| {
+                if open[a][f] == 0.0 {
+                    return;
+                }
+                let mut acc = g[a];
+                if let Some(fo) = force {
+                    acc += fo.acceleration(positions.face_position(a, unidx(dims, f)), time)[a];
+                }
+                *u += dt * acc;
+            });
+        }
+        timings.forces = t1.elapsed().as_secs_f64();
+
+        let rho = [0, 1, 2].map(|a| face_densities(&material, &vel.layout, a));
+        let t2 = Instant::now();
+        let viscous = material.mu.iter().any(|&m| m > 0.0);
+        let viscosity = if viscous {
+            let system = viscosity::ViscousSystem::new(
+                vel.layout,
+                self.config.grid.h,
+                dt,
+                &self.config.boundaries,
+                open,
+                &rho,
+                &material.mu,
+            );
+            Some(viscosity::solve(&system, &mut vel, &self.config.viscosity)?.0)
+        } else {
+            None
+        };
+        timings.viscosity = t2.elapsed().as_secs_f64();
+
+        let t3 = Instant::now();
+        let projected = pressure::project(&mut vel, open, &rho, dt, &self.config.pressure)?;
+        timings.pressure = t3.elapsed().as_secs_f64();
+
+        for a in 0..3 {
+            if let Some(index) = first_non_finite(&vel.comps[a]) {
+                return Err(SolverError::NonFinite {
+                    what: "velocity after step",
+                    index,
+                });
+            }
+        }
+        self.velocity = vel;
+        self.pressure = projected.pressure;
+        self.time += dt;
+        Ok(StepReport {
+            pressure: projected.stats,
+            viscosity,
+            timings,
+        })
+    }
+}
