@@ -5,9 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Subcommand;
-use glam::DVec3;
-use polyphase_tracker::{ContourTracker, InterfaceTracker};
-use rayon::prelude::*;
+use polyphase_tracker::{metrics, ContourTracker, InterfaceTracker};
 use serde::Serialize;
 
 /// What to benchmark.
@@ -93,16 +91,16 @@ fn contour_row(scene: &polyphase_scenes::Scene, samples: usize) -> ContourRow {
             .find(|(n, _)| *n == name)
             .map_or(0.0, |s| s.1)
     };
-    let (lo, hi) = (scene.grid.origin, scene.grid.upper());
     let h = scene.grid.h;
-    let mismatches: Vec<f64> = (0..samples)
-        .into_par_iter()
-        .filter_map(|i| {
-            let x = lo + (hi - lo) * random_unit(i as u64);
-            let (_, chi) = tracker.phi_chi(x);
-            (chi != scene.initial.phase(x)).then(|| tracker.query().distance(x) / h)
-        })
-        .collect();
+    let acc = metrics::indicator_accuracy(
+        scene.grid.origin,
+        scene.grid.upper(),
+        samples,
+        1,
+        |x| tracker.phi_chi(x).1,
+        |x| scene.initial.phase(x),
+        |x| tracker.query().distance(x),
+    );
     let (b, c, d) = (stage("build"), stage("contour"), stage("redistance"));
     ContourRow {
         res: scene.file.resolution,
@@ -113,22 +111,9 @@ fn contour_row(scene: &polyphase_scenes::Scene, samples: usize) -> ContourRow {
         contour_s: c,
         redistance_s: d,
         total_s: b + c + d,
-        indicator_accuracy: 1.0 - mismatches.len() as f64 / samples.max(1) as f64,
-        max_mismatch_over_h: mismatches.iter().copied().fold(0.0, f64::max),
+        indicator_accuracy: acc.accuracy(),
+        max_mismatch_over_h: acc.max_mismatch_distance / h,
     }
-}
-
-/// A deterministic point in the unit cube (SplitMix64 of the index).
-fn random_unit(i: u64) -> DVec3 {
-    let mut z = i.wrapping_mul(3).wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut next = || {
-        z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut x = z;
-        x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((x ^ (x >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
-    DVec3::new(next(), next(), next())
 }
 
 fn contour_table(rows: &[ContourRow]) -> String {

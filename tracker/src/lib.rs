@@ -9,6 +9,7 @@ pub mod metrics;
 pub mod ply;
 pub mod query;
 pub mod redistance;
+pub mod sampling;
 pub mod tracker;
 
 pub use contour::{MdTree, PhaseSampler};

@@ -2,8 +2,9 @@
 
 use crate::mesh::LabeledMesh;
 use crate::query::MeshQuery;
+use crate::sampling::SplitMix64;
 use glam::DVec3;
-use polyphase_grid::OUTSIDE;
+use polyphase_grid::{PhaseId, OUTSIDE};
 use rayon::prelude::*;
 
 /// Symmetric Hausdorff distance between the interface parts of `a` and `b` (faces with an
@@ -23,6 +24,51 @@ pub fn hausdorff(a: &LabeledMesh, b: &LabeledMesh) -> f64 {
     }
     let (ab, ba) = rayon::join(|| directed(a, &qb), || directed(b, &qa));
     ab.max(ba)
+}
+
+/// Outcome of comparing a tracked indicator with the exact one at random points (paper 004
+/// §7.2, Table 2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IndicatorAccuracy {
+    pub samples: usize,
+    pub mismatches: usize,
+    /// Largest distance to the tracked interface of a point whose indicator is wrong.
+    pub max_mismatch_distance: f64,
+}
+
+impl IndicatorAccuracy {
+    /// Share of points whose indicator matches.
+    pub fn accuracy(&self) -> f64 {
+        1.0 - self.mismatches as f64 / self.samples.max(1) as f64
+    }
+}
+
+/// Compares `tracked` with `exact` at `samples` uniform random points of the box `lo..hi`
+/// (point i comes from its own SplitMix64 stream seeded by `seed` and i, so the answer does
+/// not depend on the thread count); `distance` measures how far a mismatch is from the
+/// tracked interface.
+pub fn indicator_accuracy(
+    lo: DVec3,
+    hi: DVec3,
+    samples: usize,
+    seed: u64,
+    tracked: impl Fn(DVec3) -> PhaseId + Sync,
+    exact: impl Fn(DVec3) -> PhaseId + Sync,
+    distance: impl Fn(DVec3) -> f64 + Sync,
+) -> IndicatorAccuracy {
+    let (mismatches, max_mismatch_distance) = (0..samples as u64)
+        .into_par_iter()
+        .filter_map(|i| {
+            let x = SplitMix64(seed ^ i.wrapping_mul(0xD1B5_4A32_D192_ED03)).point(lo, hi);
+            (tracked(x) != exact(x)).then(|| distance(x))
+        })
+        .map(|d| (1usize, d))
+        .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1.max(b.1)));
+    IndicatorAccuracy {
+        samples,
+        mismatches,
+        max_mismatch_distance,
+    }
 }
 
 /// Largest distance from the samples of `from`'s interface to the surface behind `to`.

@@ -139,26 +139,8 @@ pub(crate) fn icosphere(
     }
 }
 
-/// Deterministic pseudo-random numbers for tests (SplitMix64).
-pub(crate) struct Rng(pub(crate) u64);
-
-impl Rng {
-    /// Uniform in [0, 1).
-    pub(crate) fn next_f64(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Uniform in the box [lo, hi).
-    pub(crate) fn point(&mut self, lo: DVec3, hi: DVec3) -> DVec3 {
-        let u = DVec3::new(self.next_f64(), self.next_f64(), self.next_f64());
-        lo + (hi - lo) * u
-    }
-}
+/// Deterministic pseudo-random numbers for tests.
+pub(crate) use crate::sampling::SplitMix64 as Rng;
 
 /// Adds triangle `[a, b, c]` (vertex indices) with labels `front`/`back`, ordered so its normal
 /// points away from `back_interior`, a point inside the back phase.
