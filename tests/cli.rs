@@ -4,23 +4,14 @@ mod common;
 
 use std::fs;
 
-use common::{polyphase, scratch};
+use common::{polyphase, run_small, scratch};
 use polyphase_tracker::{invariants, ply};
 
 #[test]
 fn run_writes_frames_stats_and_resolved_scene() {
     let dir = scratch("run_writes");
     let out = dir.join("zalesak");
-    let o = polyphase(&[
-        "run",
-        "zalesak",
-        "--resolution",
-        "16",
-        "--frames",
-        "2",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_small("zalesak", 16, 2, &out, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for f in 0..=2 {
         let bytes = fs::read(out.join(format!("frames/{f:04}.ply"))).unwrap();
@@ -59,18 +50,7 @@ fn one_and_two_threads_write_identical_frames() {
     let dir = scratch("threads");
     let run = |threads: &str| {
         let out = dir.join(format!("t{threads}"));
-        let o = polyphase(&[
-            "run",
-            "enright",
-            "--resolution",
-            "16",
-            "--frames",
-            "2",
-            "--threads",
-            threads,
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = run_small("enright", 16, 2, &out, &["--threads", threads]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         (0..=2)
             .map(|f| fs::read(out.join(format!("frames/{f:04}.ply"))).unwrap())

@@ -10,23 +10,14 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
 
-use common::{polyphase, scratch};
+use common::{polyphase, run_small, scratch};
 
 /// The run folder every test starts from: zalesak at 16 cells, frames 0–2. Made once.
 fn small_run() -> &'static PathBuf {
     static RUN: OnceLock<PathBuf> = OnceLock::new();
     RUN.get_or_init(|| {
         let out = scratch("render_run").join("zalesak");
-        let o = polyphase(&[
-            "run",
-            "zalesak",
-            "--resolution",
-            "16",
-            "--frames",
-            "2",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = run_small("zalesak", 16, 2, &out, &[]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         out
     })

@@ -18,3 +18,13 @@ pub fn scratch(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).expect("scratch folder");
     dir
 }
+
+/// `polyphase run SCENE --resolution R --frames F --out OUT` plus `extra` arguments.
+pub fn run_small(scene: &str, resolution: u32, frames: u32, out: &Path, extra: &[&str]) -> Output {
+    let (r, f) = (resolution.to_string(), frames.to_string());
+    let mut args = vec!["run", scene, "--resolution", &r, "--frames", &f];
+    let out = out.to_str().expect("UTF-8 path");
+    args.extend(["--out", out]);
+    args.extend(extra);
+    polyphase(&args)
+}
