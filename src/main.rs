@@ -5,6 +5,7 @@ mod bench;
 mod output;
 mod render;
 mod run;
+mod run_coupled;
 mod summary;
 
 use std::path::PathBuf;

@@ -1,4 +1,5 @@
 //! `polyphase run`: load a scene, track its interfaces frame by frame, write the run folder.
+//! Coupled scenes go to [`crate::run_coupled`].
 
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
@@ -42,6 +43,9 @@ pub fn run(opts: &RunOptions) -> Result<()> {
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.file.name));
     let folder = RunFolder::create(&root)?;
     folder.write("scene.toml", scene.to_toml().as_bytes())?;
+    if scene.is_coupled() {
+        return crate::run_coupled::run_coupled(&scene, &folder, &root);
+    }
 
     let names = scene.phase_names();
     let n_phases = names.len();
@@ -119,7 +123,8 @@ pub fn run(opts: &RunOptions) -> Result<()> {
     Ok(())
 }
 
-fn progress(total: usize) -> ProgressBar {
+/// A progress bar on stderr when it is a terminal, hidden otherwise.
+pub(crate) fn progress(total: usize) -> ProgressBar {
     let target = if std::io::stderr().is_terminal() {
         ProgressDrawTarget::stderr()
     } else {

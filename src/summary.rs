@@ -15,6 +15,8 @@ pub struct Summary {
     drift: Vec<f64>,
     vertices: usize,
     triangles: usize,
+    /// Pressure and viscosity CG iterations of a coupled run.
+    solver_iterations: Option<(usize, usize)>,
 }
 
 impl Summary {
@@ -28,6 +30,7 @@ impl Summary {
             drift: Vec::new(),
             vertices: 0,
             triangles: 0,
+            solver_iterations: None,
         }
     }
 
@@ -39,6 +42,11 @@ impl Summary {
                 None => self.stages.push((name, secs)),
             }
         }
+    }
+
+    /// Records the solver's total CG iterations (pressure, viscosity) of a coupled run.
+    pub fn set_solver_iterations(&mut self, pressure: usize, viscosity: usize) {
+        self.solver_iterations = Some((pressure, viscosity));
     }
 
     /// Records the final state: relative volume drift against the reference volumes.
@@ -71,6 +79,9 @@ impl Summary {
             "frames {}  steps {}  wall {:.2} s  final mesh {} vertices, {} triangles",
             self.frames, self.steps, self.wall, self.vertices, self.triangles
         );
+        if let Some((p, v)) = self.solver_iterations {
+            let _ = writeln!(s, "solver CG iterations: pressure {p}, viscosity {v}");
+        }
         let _ = writeln!(s, "{:<16} {:>10}", "stage", "seconds");
         for (name, secs) in &self.stages {
             let _ = writeln!(s, "{name:<16} {secs:>10.3}");
@@ -95,8 +106,12 @@ impl Summary {
             .zip(&self.drift)
             .map(|(n, d)| (n.clone(), json!(d)))
             .collect();
+        let iterations = self
+            .solver_iterations
+            .map(|(p, v)| json!({ "pressure": p, "viscosity": v }));
         json!({
             "summary": {
+                "solver_iterations": iterations,
                 "frames": self.frames,
                 "steps": self.steps,
                 "wall_s": self.wall,

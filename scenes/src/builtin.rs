@@ -16,6 +16,15 @@ pub const BUILTIN: &[(&str, &str)] = &[
         include_str!("../builtin/circle3_rotate.toml"),
     ),
     ("checker", include_str!("../builtin/checker.toml")),
+    ("dambreak", include_str!("../builtin/dambreak.toml")),
+    (
+        "dambreak_column",
+        include_str!("../builtin/dambreak_column.toml"),
+    ),
+    (
+        "rayleigh_taylor",
+        include_str!("../builtin/rayleigh_taylor.toml"),
+    ),
 ];
 
 /// The scene `polyphase run` uses when none is named.
@@ -115,6 +124,52 @@ mod tests {
             assert!(err.contains(expect), "expected '{expect}' in: {err}");
             assert!(!err.contains('\n'), "one line: {err}");
         }
+    }
+
+    #[test]
+    fn coupled_scenes_get_a_nested_solver_grid() {
+        let s = builtin("dambreak_column").unwrap().unwrap();
+        let g = s.solver_grid.unwrap();
+        assert_eq!(s.grid.dims, [128, 64, 2]);
+        assert_eq!(g.dims, [64, 32, 1]);
+        // Both grids cover the same box.
+        assert!((g.upper() - s.grid.upper()).length() < 1e-12);
+        // The resolution override keeps the tracker-to-solver ratio.
+        let low = s.with_overrides(Some(32), None).unwrap();
+        assert_eq!(low.solver_grid.unwrap().dims, [16, 8, 1]);
+        assert!(!builtin("zalesak").unwrap().unwrap().is_coupled());
+    }
+
+    #[test]
+    fn bad_coupled_scenes_name_the_problem_and_place() {
+        let good = builtin_text("dambreak");
+        let cases: Vec<(String, &str)> = vec![
+            (
+                good.replace("density = 800.0", "density = 0.0"),
+                "phases[2].density",
+            ),
+            (
+                good.replace("[solver]\nresolution = 32", "[solver]\nresolution = 24"),
+                "solver.resolution",
+            ),
+            (good.replace("cfl = 1.0", "cfl = -1.0"), "solver.cfl"),
+            (
+                good.replace("[solver]", "[solver]\nmax_dt = 0.0"),
+                "solver.max_dt",
+            ),
+            (
+                good.replace("field = \"fluid\"", "field = \"still\""),
+                "solver: only a coupled scene",
+            ),
+        ];
+        for (text, expect) in cases {
+            let err = Scene::parse(&text, "test.toml").unwrap_err().to_string();
+            assert!(err.contains(expect), "expected '{expect}' in: {err}");
+        }
+    }
+
+    fn builtin_text(name: &str) -> &'static str {
+        BUILTIN.iter().find(|(n, _)| *n == name).unwrap().1
     }
 
     #[test]

@@ -20,6 +20,10 @@ pub struct SceneFile {
     pub domain: DomainSpec,
     pub time: TimeSpec,
     pub velocity: VelocitySpec,
+    /// Fluid solver settings of a coupled scene (`velocity = { field = "fluid" }`); filled with
+    /// defaults there, and an error on a passive scene.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver: Option<SolverSpec>,
     /// Name of the phase that fills every point no shape covers.
     pub background: String,
     pub phases: Vec<PhaseSpec>,
@@ -127,6 +131,67 @@ pub enum VelocitySpec {
     Enright { period: f64 },
     /// Single-vortex stretching field on the unit square (paper 004 Eq. 2), w = 0.
     Vortex { period: f64 },
+    /// The velocity of the MAC-grid fluid solver, coupled to the tracker (paper 004 §7.5).
+    Fluid,
+}
+
+/// Solver settings of a coupled scene; every field has a default.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    /// Solver cells along the longest domain axis; the tracker's `resolution` must be a whole
+    /// multiple of it (the tracker runs finer, DESIGN.md). Default: half the tracker's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resolution: Option<i64>,
+    /// m/s²; DESIGN.md convention is −y.
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    /// Largest step as a fraction of h / (max speed) (solver CFL number).
+    #[serde(default = "default_solver_cfl")]
+    pub cfl: f64,
+    /// Largest step in seconds, whatever the speed. Default: no limit beyond the frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_dt: Option<f64>,
+    /// Relative residual at which the pressure and viscosity solves stop.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// Preconditioner of the pressure and viscosity solves.
+    #[serde(default)]
+    pub preconditioner: PreconditionerSpec,
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        Self {
+            resolution: None,
+            gravity: default_gravity(),
+            cfl: default_solver_cfl(),
+            max_dt: None,
+            tolerance: default_tolerance(),
+            preconditioner: PreconditionerSpec::default(),
+        }
+    }
+}
+
+/// Preconditioner named in a scene file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PreconditionerSpec {
+    /// Modified incomplete Cholesky.
+    #[default]
+    Mic0,
+    /// Geometric multigrid V-cycle.
+    Multigrid,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, -9.81, 0.0]
+}
+fn default_solver_cfl() -> f64 {
+    1.0
+}
+fn default_tolerance() -> f64 {
+    1e-6
 }
 
 /// A phase: physical properties and render hints.
@@ -168,8 +233,9 @@ pub struct ShapeSpec {
     /// Phase name the shape is filled with.
     pub phase: String,
     /// `sphere` (center, radius), `cylinder` (center, radius; axis parallel to z), `box`
-    /// (lo, hi) or `half_space` (point, normal: the phase is on the side the normal points
-    /// away from).
+    /// (lo, hi), `half_space` (point, normal: the phase is on the side the normal points
+    /// away from) or `wave` (a half-space whose plane is displaced by amplitude·cos(2π(x −
+    /// point.x)/wavelength) along the normal).
     pub kind: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub center: Option<[f64; 3]>,
@@ -183,6 +249,12 @@ pub struct ShapeSpec {
     pub point: Option<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub normal: Option<[f64; 3]>,
+    /// `wave` only: displacement amplitude (m) of the plane along its normal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amplitude: Option<f64>,
+    /// `wave` only: wavelength (m) of the cosine displacement along x.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wavelength: Option<f64>,
     /// Half-spaces intersected with the shape (keep the side the normal points away from):
     /// cuts a sphere into halves or wedges.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

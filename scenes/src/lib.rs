@@ -12,7 +12,7 @@ pub mod volume;
 
 pub use builtin::{builtin, load, BUILTIN, DEFAULT_SCENE};
 pub use error::SceneError;
-pub use format::{SceneFile, TrackerKind};
+pub use format::{PreconditionerSpec, SceneFile, SolverSpec, TrackerKind};
 pub use scene::Scene;
 pub use shapes::InitialPhases;
 pub use velocity::AnalyticVelocity;

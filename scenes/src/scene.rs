@@ -4,7 +4,7 @@ use glam::DVec3;
 use polyphase_grid::{GridSpec, PhaseId};
 
 use crate::error::SceneError;
-use crate::format::{HalfSpaceSpec, SceneFile, ShapeSpec, VelocitySpec};
+use crate::format::{HalfSpaceSpec, SceneFile, ShapeSpec, SolverSpec, VelocitySpec};
 use crate::shapes::{InitialPhases, Primitive, Shape};
 use crate::velocity::AnalyticVelocity;
 
@@ -20,8 +20,11 @@ pub struct Scene {
     pub grid: GridSpec,
     /// Initial phases.
     pub initial: InitialPhases,
-    /// The advecting flow.
+    /// The advecting flow (`Still` for a coupled scene, whose flow is the solver's).
     pub velocity: AnalyticVelocity,
+    /// The solver's grid of a coupled scene (same box as `grid`, cells a whole multiple
+    /// larger); `None` for a passive scene.
+    pub solver_grid: Option<GridSpec>,
 }
 
 impl Scene {
@@ -72,6 +75,7 @@ impl Scene {
             ));
         }
         let velocity = compile_velocity(&file.velocity, &bad)?;
+        let ratio = check_solver(&mut file, &bad)?;
         let phases = compile_phases(&file, &bad)?;
         let find = |name: &str, place: &str| -> Result<PhaseId, SceneError> {
             phases
@@ -99,12 +103,13 @@ impl Scene {
                 })
             })
             .collect::<Result<Vec<_>, SceneError>>()?;
-        let grid = snap_grid(&mut file);
+        let (grid, solver_grid) = snap_grid(&mut file, ratio);
         Ok(Scene {
             file,
             grid,
             initial: InitialPhases { background, shapes },
             velocity,
+            solver_grid,
         })
     }
 
@@ -116,6 +121,11 @@ impl Scene {
     ) -> Result<Scene, SceneError> {
         let mut file = self.file.clone();
         if let Some(r) = resolution {
+            // A coupled scene keeps its tracker-to-solver ratio.
+            if let Some(spec) = file.solver.as_mut() {
+                let ratio = file.resolution / spec.resolution.unwrap_or(file.resolution).max(1);
+                spec.resolution = Some(r / ratio.max(1));
+            }
             file.resolution = r;
         }
         if let Some(f) = frames {
@@ -134,6 +144,11 @@ impl Scene {
         toml::to_string(&self.file).unwrap_or_default()
     }
 
+    /// True when the solver's velocity moves the interfaces.
+    pub fn is_coupled(&self) -> bool {
+        self.solver_grid.is_some()
+    }
+
     /// Seconds between frames.
     pub fn frame_dt(&self) -> f64 {
         self.file.time.end / self.file.time.frames as f64
@@ -148,8 +163,10 @@ impl Scene {
 }
 
 /// Snaps the domain to whole cells of size h = longest extent / resolution (a slab gets
-/// exactly two cells in z) and writes the snapped box back into the file.
-fn snap_grid(file: &mut SceneFile) -> GridSpec {
+/// exactly two tracker cells in z) and writes the snapped box back into the file. With a
+/// solver `ratio` k, the box is snapped to whole solver cells (size k·h) first so both grids
+/// cover exactly the same box; a coupled slab is one solver cell thick (two when k = 1).
+fn snap_grid(file: &mut SceneFile, ratio: Option<usize>) -> (GridSpec, Option<GridSpec>) {
     let lo = DVec3::from_array(file.domain.lo);
     let ext = DVec3::from_array(file.domain.hi) - lo;
     let longest = if file.domain.slab {
@@ -158,20 +175,59 @@ fn snap_grid(file: &mut SceneFile) -> GridSpec {
         ext.max_element()
     };
     let h = longest / file.resolution as f64;
-    let mut dims = [0usize; 3];
-    for (a, d) in dims.iter_mut().enumerate() {
-        *d = ((ext[a] / h).round() as usize).max(1);
+    let k = ratio.unwrap_or(1);
+    let hs = h * k as f64;
+    let mut coarse = [0usize; 3];
+    for (a, d) in coarse.iter_mut().enumerate() {
+        *d = ((ext[a] / hs).round() as usize).max(1);
     }
     if file.domain.slab {
-        dims[2] = 2;
+        coarse[2] = if k == 1 { 2 } else { 1 };
     }
     let grid = GridSpec {
         origin: lo,
         h,
-        dims,
+        dims: coarse.map(|d| d * k),
     };
     file.domain.hi = grid.upper().to_array();
-    grid
+    let solver = ratio.map(|_| GridSpec {
+        origin: lo,
+        h: hs,
+        dims: coarse,
+    });
+    (grid, solver)
+}
+
+/// Checks the `[solver]` table against the velocity and fills its defaults; returns the
+/// tracker-to-solver resolution ratio of a coupled scene.
+fn check_solver(file: &mut SceneFile, bad: &Bad) -> Result<Option<usize>, SceneError> {
+    if file.velocity != VelocitySpec::Fluid {
+        if file.solver.is_some() {
+            return Err(bad(
+                "solver",
+                "only a coupled scene (velocity.field = \"fluid\") takes a [solver] table".into(),
+            ));
+        }
+        return Ok(None);
+    }
+    let spec = file.solver.get_or_insert_with(SolverSpec::default);
+    let res = *spec.resolution.get_or_insert((file.resolution / 2).max(1));
+    if res < 4 || file.resolution % res != 0 {
+        return Err(bad(
+            "solver.resolution",
+            format!(
+                "must be at least 4 and divide the tracker resolution {}, got {res}",
+                file.resolution
+            ),
+        ));
+    }
+    check_vec(&spec.gravity, "solver.gravity", bad)?;
+    positive(spec.cfl, "solver.cfl", bad)?;
+    positive(spec.tolerance, "solver.tolerance", bad)?;
+    if let Some(m) = spec.max_dt {
+        positive(m, "solver.max_dt", bad)?;
+    }
+    Ok(Some((file.resolution / res) as usize))
 }
 
 fn one_line(s: &str) -> String {
@@ -228,6 +284,7 @@ fn compile_velocity(v: &VelocitySpec, bad: &Bad) -> Result<AnalyticVelocity, Sce
         VelocitySpec::Vortex { period } => AnalyticVelocity::Vortex {
             period: positive(*period, "velocity.period", bad)?,
         },
+        VelocitySpec::Fluid => AnalyticVelocity::Still,
     })
 }
 
@@ -315,10 +372,24 @@ fn compile_primitive(s: &ShapeSpec, place: &str, bad: &Bad) -> Result<Primitive,
             point: check_vec(&need3(s.point, "point")?, &format!("{place}.point"), bad)?,
             normal: unit(&need3(s.normal, "normal")?, &format!("{place}.normal"), bad)?,
         },
+        "wave" => {
+            let amplitude = s
+                .amplitude
+                .ok_or_else(|| bad(place, "kind 'wave' needs the field 'amplitude'".into()))?;
+            let wavelength = s
+                .wavelength
+                .ok_or_else(|| bad(place, "kind 'wave' needs the field 'wavelength'".into()))?;
+            Primitive::Wave {
+                point: check_vec(&need3(s.point, "point")?, &format!("{place}.point"), bad)?,
+                normal: unit(&need3(s.normal, "normal")?, &format!("{place}.normal"), bad)?,
+                amplitude: finite(amplitude, &format!("{place}.amplitude"), bad)?,
+                wavelength: positive(wavelength, &format!("{place}.wavelength"), bad)?,
+            }
+        }
         other => {
             return Err(bad(
                 &format!("{place}.kind"),
-                format!("unknown shape kind '{other}' (sphere, cylinder, box, half_space)"),
+                format!("unknown shape kind '{other}' (sphere, cylinder, box, half_space, wave)"),
             ))
         }
     })

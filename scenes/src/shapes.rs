@@ -26,6 +26,14 @@ pub enum Primitive {
         point: DVec3,
         normal: DVec3,
     },
+    /// A half-space whose plane is displaced along `normal` by amplitude·cos(2π (x − point.x) /
+    /// wavelength): the single-mode perturbed interface of Rayleigh–Taylor (paper 004 Fig. 21).
+    Wave {
+        point: DVec3,
+        normal: DVec3,
+        amplitude: f64,
+        wavelength: f64,
+    },
 }
 
 impl Primitive {
@@ -42,6 +50,17 @@ impl Primitive {
                 q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
             }
             Primitive::HalfSpace { point, normal } => (x - point).dot(normal),
+            // Divided by √(1 + max slope²) so |sdf| never exceeds the true distance.
+            Primitive::Wave {
+                point,
+                normal,
+                amplitude,
+                wavelength,
+            } => {
+                let k = std::f64::consts::TAU / wavelength;
+                let d = (x - point).dot(normal) - amplitude * (k * (x.x - point.x)).cos();
+                d / (1.0 + (k * amplitude).powi(2)).sqrt()
+            }
         }
     }
 }

@@ -1,0 +1,14 @@
+//! The coupled simulation (DESIGN.md `coupling/`, paper 004 §7.5): the solver's velocity
+//! advects the tracker, and the tracker's φ and χ, sampled at the solver's cells, give the
+//! per-phase density and viscosity of the next solver step. The tracker may run finer.
+#![deny(unsafe_code)]
+
+pub mod diagnostics;
+pub mod error;
+pub mod setup;
+pub mod sim;
+
+pub use diagnostics::interface_extent;
+pub use error::CouplingError;
+pub use setup::from_scene;
+pub use sim::{CoupledSim, FrameReport, TimeControl};
