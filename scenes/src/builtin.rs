@@ -28,7 +28,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
 ];
 
 /// The scene `polyphase run` uses when none is named.
-pub const DEFAULT_SCENE: &str = "zalesak";
+pub const DEFAULT_SCENE: &str = "dambreak";
 
 /// A built-in scene by name.
 pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {

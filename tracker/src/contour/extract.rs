@@ -28,7 +28,7 @@ impl MdTree {
         polys.extend(self.closure_polys());
         let mut keys: Vec<VKey> = polys
             .par_iter()
-            .flat_map_iter(|p| p.verts[..p.len as usize].to_vec())
+            .flat_map_iter(|p| p.verts.into_iter().take(p.len as usize))
             .collect();
         keys.par_sort_unstable();
         keys.dedup();
