@@ -49,12 +49,7 @@ pub fn run(opts: &RunOptions) -> Result<()> {
 
     let names = scene.phase_names();
     let n_phases = names.len();
-    let reference = polyphase_scenes::volume::reference_volumes(
-        &scene.initial,
-        &scene.grid,
-        n_phases,
-        polyphase_scenes::volume::DEFAULT_DEPTH,
-    );
+    let reference = scene.reference_volumes();
     let frames = scene.file.time.frames as usize;
     let steps = scene.steps_per_frame();
     let dt = scene.frame_dt() / steps as f64;

@@ -18,12 +18,7 @@ use crate::summary::Summary;
 /// Runs a validated coupled scene into `root` (already checked to be writable by `folder`).
 pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path) -> Result<()> {
     let names = scene.phase_names();
-    let reference = polyphase_scenes::volume::reference_volumes(
-        &scene.initial,
-        &scene.grid,
-        names.len(),
-        polyphase_scenes::volume::DEFAULT_DEPTH,
-    );
+    let reference = scene.reference_volumes();
     let frames = scene.file.time.frames as usize;
     let (mut sim, first) = polyphase_coupling::from_scene(scene)?;
     let sg = *sim.solver().grid();

@@ -4,7 +4,7 @@ mod common;
 
 use std::fs;
 
-use common::{polyphase, run_small, scratch};
+use common::{polyphase, run_file, run_small, scratch};
 use polyphase_tracker::{invariants, ply};
 
 #[test]
@@ -97,12 +97,7 @@ fn bad_scenes_fail_with_one_line_and_write_nothing() {
         let path = dir.join(format!("{name}.toml"));
         fs::write(&path, text).unwrap();
         let out = dir.join(format!("{name}_out"));
-        let o = polyphase(&[
-            "run",
-            path.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = run_file(&path, &out);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{name}: should fail");
         assert_eq!(err.trim_end().lines().count(), 1, "{name}: one line: {err}");

@@ -4,7 +4,7 @@ mod common;
 
 use std::fs;
 
-use common::{polyphase, run_small, scratch};
+use common::{run_file, run_small, scratch};
 
 #[test]
 fn coupled_column_writes_frames_and_surge_front() {
@@ -54,12 +54,7 @@ fn bad_coupled_input_fails_with_one_line_and_writes_nothing() {
     let path = dir.join("dense.toml");
     fs::write(&path, good.replace("density = 1000.0", "density = -5.0")).unwrap();
     let out = dir.join("dense_out");
-    let o = polyphase(&[
-        "run",
-        path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_file(&path, &out);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");

@@ -1,7 +1,7 @@
 //! Passive advection of the built-in scenes with the contouring tracker: mesh invariants after
 //! every step, and volume / shape recovery after a full period (paper 004 §7.2–7.3).
 
-use polyphase_scenes::{volume, Scene};
+use polyphase_scenes::Scene;
 use polyphase_tracker::{invariants, metrics, ContourTracker, InterfaceTracker, LabeledMesh};
 
 /// Result of running a scene to its end.
@@ -42,8 +42,7 @@ fn run_scene(scene: &Scene, steps: Option<usize>) -> Finished {
         invariants::check(tracker.mesh(), min_area)
             .unwrap_or_else(|e| panic!("{name} step {s}: {e}"));
     }
-    let reference =
-        volume::reference_volumes(&scene.initial, &scene.grid, n, volume::DEFAULT_DEPTH);
+    let reference = scene.reference_volumes();
     Finished {
         initial,
         tracker,

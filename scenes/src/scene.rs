@@ -134,6 +134,16 @@ impl Scene {
         Scene::from_file(file, "command line")
     }
 
+    /// Exact per-phase volumes of the initial shapes (the reference for volume drift).
+    pub fn reference_volumes(&self) -> Vec<f64> {
+        crate::volume::reference_volumes(
+            &self.initial,
+            &self.grid,
+            self.file.phases.len(),
+            crate::volume::DEFAULT_DEPTH,
+        )
+    }
+
     /// Phase names in id order.
     pub fn phase_names(&self) -> Vec<String> {
         self.file.phases.iter().map(|p| p.name.clone()).collect()

@@ -1,4 +1,6 @@
 //! Helpers shared by the end-to-end tests: run the binary, make scratch folders.
+// Each test file compiles this module on its own and uses only some of the helpers.
+#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -27,4 +29,14 @@ pub fn run_small(scene: &str, resolution: u32, frames: u32, out: &Path, extra: &
     args.extend(["--out", out]);
     args.extend(extra);
     polyphase(&args)
+}
+
+/// `polyphase run FILE --out OUT`.
+pub fn run_file(file: &Path, out: &Path) -> Output {
+    polyphase(&[
+        "run",
+        file.to_str().expect("UTF-8 path"),
+        "--out",
+        out.to_str().expect("UTF-8 path"),
+    ])
 }
