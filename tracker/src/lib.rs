@@ -3,6 +3,7 @@
 
 pub mod contour;
 pub mod contour_tracker;
+pub mod front;
 pub mod invariants;
 pub mod mesh;
 pub mod metrics;
