@@ -4,6 +4,8 @@
 //! Kept tiny on purpose so that `tracker` and `solver` never depend on each other.
 #![deny(unsafe_code)]
 
+pub mod vdb;
+
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
