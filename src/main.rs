@@ -2,6 +2,7 @@
 #![deny(unsafe_code)]
 
 mod bench;
+mod checkpoint;
 mod output;
 mod render;
 mod run;
@@ -44,6 +45,15 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Continue a killed run from its last checkpoint; the frames come out byte-identical to
+    /// an uninterrupted run's.
+    Resume {
+        /// The run's output folder.
+        dir: PathBuf,
+        /// Worker threads (default: all cores). Output is identical for any value.
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Render a run folder with Mitsuba 3: images, movie and plots into DIR/render and DIR/plots.
     Render(render::RenderArgs),
     /// List the built-in scenes.
@@ -72,6 +82,7 @@ fn main() -> ExitCode {
                 frames,
             })
         }),
+        Command::Resume { dir, threads } => with_threads(threads, || run::resume(&dir)),
         Command::Render(args) => render::render(&args),
         Command::Scenes => {
             list_scenes();

@@ -1,5 +1,6 @@
 //! `polyphase run` for a coupled scene: the solver's velocity moves the tracker (paper 004
-//! §7.5); frames, stats with per-stage timings, solver iterations and scene diagnostics.
+//! §7.5); frames, stats with per-stage timings, solver iterations and scene diagnostics, and
+//! a checkpoint (tracker mesh and tree, solver state) at every frame end.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -7,20 +8,59 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use polyphase_coupling::{interface_extent, CoupledSim, FrameReport};
+use polyphase_grid::vdb::{encode, phase_field_grids, velocity_grid, Compression, VdbGrid};
 use polyphase_scenes::Scene;
 use polyphase_tracker::{ContourTracker, InterfaceTracker, PhaseId, StepStats};
 use serde_json::{json, Value};
 
+use crate::checkpoint::{Checkpoint, Totals};
 use crate::output::RunFolder;
-use crate::run::progress;
+use crate::run::{progress, Start};
 use crate::summary::Summary;
 
-/// Runs a validated coupled scene into `root` (already checked to be writable by `folder`).
-pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path) -> Result<()> {
+/// Runs a validated coupled scene into `root` (already checked to be writable by `folder`),
+/// from frame 0 or from a checkpoint.
+pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path, start: Start) -> Result<()> {
     let names = scene.phase_names();
     let reference = scene.reference_volumes();
     let frames = scene.file.time.frames as usize;
-    let (mut sim, first) = polyphase_coupling::from_scene(scene)?;
+    let mut summary = Summary::new(&names);
+    let (mut sim, hash, done, prior) = match start {
+        Start::Fresh(hash) => {
+            let (sim, first) = polyphase_coupling::from_scene(scene)?;
+            summary.add_step(&first);
+            folder.write_frame(0, sim.tracker().mesh())?;
+            folder.write_grids(0, &grids(&sim)?)?;
+            let initial = FrameReport {
+                stages: first.stages.clone(),
+                cells: first.cells,
+                interface_cells: first.interface_cells,
+                ..FrameReport::default()
+            };
+            folder.append_stats(&frame_line(0, 0.0, &initial, &sim, scene))?;
+            (sim, hash, 0, Totals::default())
+        }
+        Start::Resume(c) => {
+            let c = *c;
+            let tracker = ContourTracker::from_parts(
+                scene.grid,
+                c.mesh,
+                c.tree,
+                names.len(),
+                scene.initial.background,
+                c.volume_targets,
+            );
+            let mut sim = polyphase_coupling::with_tracker(scene, tracker)?;
+            let solver = c
+                .solver
+                .context("the checkpoint has no solver state (it is of a passive run)")?;
+            sim.restore(solver, c.time, c.steps)?;
+            (sim, c.scene_hash, c.frame, c.totals)
+        }
+    };
+    for (name, secs) in &prior.stages {
+        summary.add_stage(name, *secs);
+    }
     let sg = *sim.solver().grid();
     eprintln!(
         "{}: tracker {}×{}×{} cells (h = {:.4e}), solver {}×{}×{} cells (h = {:.4e}), {frames} frames, output {}",
@@ -35,27 +75,43 @@ pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path) -> Result<()>
         sg.h,
         root.display()
     );
-    let bar = progress(frames);
-    let mut summary = Summary::new(&names);
-    summary.add_step(&first);
-    folder.write_frame(0, sim.tracker().mesh())?;
-    let initial = FrameReport {
-        stages: first.stages.clone(),
-        cells: first.cells,
-        interface_cells: first.interface_cells,
-        ..FrameReport::default()
+    let save = |frame: usize, sim: &CoupledSim<ContourTracker>, totals: Totals| {
+        folder.write_checkpoint(&Checkpoint {
+            scene_hash: hash,
+            frame,
+            time: sim.time(),
+            steps: sim.steps(),
+            mesh: sim.tracker().mesh().clone(),
+            tree: sim.tracker().tree().clone(),
+            volume_targets: sim.tracker().volume_targets().map(<[f64]>::to_vec),
+            solver: Some(sim.solver().state()),
+            totals,
+        })
     };
-    folder.append_stats(&frame_line(0, 0.0, &initial, &sim, scene))?;
+    if done == 0 {
+        save(
+            0,
+            &sim,
+            Totals {
+                stages: summary.stages().to_vec(),
+                ..Totals::default()
+            },
+        )?;
+    }
 
+    let bar = progress(frames);
+    bar.set_position(done as u64);
     let started = Instant::now();
-    let (mut pressure_its, mut viscosity_its) = (0, 0);
-    for frame in 1..=frames {
+    let (mut pressure_its, mut viscosity_its) =
+        (prior.pressure_iterations, prior.viscosity_iterations);
+    for frame in done + 1..=frames {
         let time = frame as f64 * scene.frame_dt();
         let mut report = sim
             .advance_to(time)
             .with_context(|| format!("frame {frame} (t = {time:.4} s)"))?;
         let write_start = Instant::now();
         folder.write_frame(frame, sim.tracker().mesh())?;
+        folder.write_grids(frame, &grids(&sim)?)?;
         report
             .stages
             .push(("write", write_start.elapsed().as_secs_f64()));
@@ -66,6 +122,16 @@ pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path) -> Result<()>
         pressure_its += report.pressure_iterations;
         viscosity_its += report.viscosity_iterations;
         folder.append_stats(&frame_line(frame, time, &report, &sim, scene))?;
+        save(
+            frame,
+            &sim,
+            Totals {
+                wall: prior.wall + started.elapsed().as_secs_f64(),
+                pressure_iterations: pressure_its,
+                viscosity_iterations: viscosity_its,
+                stages: summary.stages().to_vec(),
+            },
+        )?;
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -73,7 +139,7 @@ pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path) -> Result<()>
     summary.finish(
         frames,
         sim.steps(),
-        started.elapsed().as_secs_f64(),
+        prior.wall + started.elapsed().as_secs_f64(),
         &reference,
         &sim.tracker().phase_volumes(),
         sim.tracker().mesh(),
@@ -81,6 +147,24 @@ pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path) -> Result<()>
     print!("{}", summary.table());
     folder.append_stats(&summary.json())?;
     Ok(())
+}
+
+/// The frame's grids on the solver's cells, as one OpenVDB file: φ and χ as the solver reads
+/// them, the velocity at the cell centres ("v") and the pressure ("p").
+fn grids(sim: &CoupledSim<ContourTracker>) -> Result<Vec<u8>> {
+    let solver = sim.solver();
+    let grid = *solver.grid();
+    let mut field = sim.tracker().sample(&grid);
+    // φ = ∞ (no interface left) is stored as the grid's background, the domain diagonal.
+    let diagonal = grid.h * (grid.dims.iter().map(|&n| (n * n) as f64).sum::<f64>()).sqrt();
+    for p in &mut field.phi {
+        *p = p.min(diagonal);
+    }
+    let mut out: Vec<VdbGrid> = phase_field_grids(&field).into();
+    out.push(velocity_grid(&grid, solver.velocity(), sim.time()));
+    let pressure = solver.pressure().iter().map(|&p| p as f32).collect();
+    out.push(VdbGrid::scalar("p", pressure, 0.0));
+    Ok(encode(&grid, &out, Compression::Zip)?)
 }
 
 fn frame_line(

@@ -8,7 +8,7 @@ use serde_json::{json, Value};
 /// Totals gathered over a run.
 pub struct Summary {
     names: Vec<String>,
-    stages: Vec<(&'static str, f64)>,
+    stages: Vec<(String, f64)>,
     frames: usize,
     steps: usize,
     wall: f64,
@@ -37,11 +37,21 @@ impl Summary {
     /// Adds one step's stage timings.
     pub fn add_step(&mut self, step: &StepStats) {
         for &(name, secs) in &step.stages {
-            match self.stages.iter_mut().find(|(n, _)| *n == name) {
-                Some(entry) => entry.1 += secs,
-                None => self.stages.push((name, secs)),
-            }
+            self.add_stage(name, secs);
         }
+    }
+
+    /// Adds `secs` to stage `name` (a new stage goes last).
+    pub fn add_stage(&mut self, name: &str, secs: f64) {
+        match self.stages.iter_mut().find(|(n, _)| n == name) {
+            Some(entry) => entry.1 += secs,
+            None => self.stages.push((name.to_string(), secs)),
+        }
+    }
+
+    /// Seconds per stage so far, in the order the stages first ran (kept by checkpoints).
+    pub fn stages(&self) -> &[(String, f64)] {
+        &self.stages
     }
 
     /// Records the solver's total CG iterations (pressure, viscosity) of a coupled run.
@@ -98,7 +108,7 @@ impl Summary {
         let stages: serde_json::Map<String, Value> = self
             .stages
             .iter()
-            .map(|(n, t)| (n.to_string(), json!(t)))
+            .map(|(n, t)| (n.clone(), json!(t)))
             .collect();
         let drift: serde_json::Map<String, Value> = self
             .names

@@ -10,5 +10,5 @@ pub mod sim;
 
 pub use diagnostics::interface_extent;
 pub use error::CouplingError;
-pub use setup::from_scene;
+pub use setup::{from_scene, with_tracker};
 pub use sim::{CoupledSim, FrameReport, TimeControl};

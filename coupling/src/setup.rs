@@ -14,6 +14,30 @@ use crate::sim::{CoupledSim, TimeControl};
 /// tracker (the scene's resolution, exact initial shapes) for a coupled scene, plus the
 /// tracker's first-build stats.
 pub fn from_scene(scene: &Scene) -> Result<(CoupledSim<ContourTracker>, StepStats), CouplingError> {
+    let (solver, phases, control) = solver_parts(scene)?;
+    let initial = |x| scene.initial.sample(x);
+    let (mut tracker, first) = ContourTracker::new(
+        scene.grid,
+        &initial,
+        scene.file.phases.len(),
+        scene.initial.background,
+    );
+    tracker.set_volume_targets(scene.volume_targets());
+    Ok((CoupledSim::new(solver, tracker, phases, control)?, first))
+}
+
+/// The coupled simulation of a coupled scene around a given tracker (one restored from a
+/// checkpoint), with the solver at rest at time 0 until it is restored too.
+pub fn with_tracker(
+    scene: &Scene,
+    tracker: ContourTracker,
+) -> Result<CoupledSim<ContourTracker>, CouplingError> {
+    let (solver, phases, control) = solver_parts(scene)?;
+    CoupledSim::new(solver, tracker, phases, control)
+}
+
+/// The solver, phase properties and time control a coupled scene asks for.
+fn solver_parts(scene: &Scene) -> Result<(Solver, Vec<PhaseProps>, TimeControl), CouplingError> {
     let (Some(grid), Some(spec)) = (scene.solver_grid, scene.file.solver.as_ref()) else {
         return Err(CouplingError::Invalid(format!(
             "scene '{}' is passive (velocity.field is not \"fluid\")",
@@ -42,18 +66,11 @@ pub fn from_scene(scene: &Scene) -> Result<(CoupledSim<ContourTracker>, StepStat
             viscosity: p.viscosity,
         })
         .collect();
-    let initial = |x| scene.initial.sample(x);
-    let (tracker, first) = ContourTracker::new(
-        scene.grid,
-        &initial,
-        scene.file.phases.len(),
-        scene.initial.background,
-    );
     let control = TimeControl {
         cfl: spec.cfl,
         max_dt: spec.max_dt.unwrap_or(scene.frame_dt()),
         // The scene's `time.cfl` is the tracker's step in its own cells.
         tracker_travel: scene.file.time.cfl * scene.grid.h,
     };
-    Ok((CoupledSim::new(solver, tracker, phases, control)?, first))
+    Ok((solver, phases, control))
 }

@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use polyphase_solver::{MacGrid, PhaseProps, Solver};
+use polyphase_solver::{MacGrid, PhaseProps, Solver, SolverState};
 use polyphase_tracker::{InterfaceTracker, StepStats};
 
 use crate::error::CouplingError;
@@ -128,6 +128,22 @@ impl<T: InterfaceTracker> CoupledSim<T> {
     /// Coupled steps taken so far.
     pub fn steps(&self) -> usize {
         self.steps
+    }
+
+    /// Puts back the state of a frame end (from a checkpoint): the solver's state, the
+    /// simulated time and the step count. At a frame end the tracker is in step with the
+    /// solver, so no pending solver steps are kept.
+    pub fn restore(
+        &mut self,
+        solver: SolverState,
+        time: f64,
+        steps: usize,
+    ) -> Result<(), CouplingError> {
+        self.solver.restore(solver)?;
+        self.time = time;
+        self.steps = steps;
+        self.pending = None;
+        Ok(())
     }
 
     /// One coupled step of `dt`: φ, χ at the solver's cells → solver step; the tracker then

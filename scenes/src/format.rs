@@ -15,6 +15,10 @@ pub struct SceneFile {
     /// Which interface tracker runs the scene.
     #[serde(default)]
     pub tracker: TrackerKind,
+    /// Whether each tracker step gives every phase back its exact initial volume by a small
+    /// offset of the interfaces (`polyphase_tracker::volume_correction`; not in paper 004).
+    #[serde(default = "default_true")]
+    pub volume_correction: bool,
     /// Tracker cells along the longest domain axis.
     pub resolution: i64,
     pub domain: DomainSpec,
@@ -27,7 +31,8 @@ pub struct SceneFile {
     /// Name of the phase that fills every point no shape covers.
     pub background: String,
     pub phases: Vec<PhaseSpec>,
-    /// Initial shapes, painted in order: a later shape overrides an earlier one where they overlap.
+    /// Initial shapes. Where shapes overlap, the one with the higher `priority` wins; shapes of
+    /// different phases with the same priority must not overlap (the scene would be ambiguous).
     #[serde(default)]
     pub shapes: Vec<ShapeSpec>,
     /// Optional hints for the offline renderer (`render/`); absent fields use its defaults.
@@ -234,9 +239,14 @@ pub struct ShapeSpec {
     pub phase: String,
     /// `sphere` (center, radius), `cylinder` (center, radius; axis parallel to z), `box`
     /// (lo, hi), `half_space` (point, normal: the phase is on the side the normal points
-    /// away from) or `wave` (a half-space whose plane is displaced by amplitude·cos(2π(x −
-    /// point.x)/wavelength) along the normal).
+    /// away from), `wave` (a half-space whose plane is displaced by amplitude·cos(2π(x −
+    /// point.x)/wavelength) along the normal) or `mesh` (the inside of a closed triangle mesh
+    /// read from the OBJ `file`, then scaled by `scale` and moved by `translate`).
     pub kind: String,
+    /// Where this shape overlaps shapes of other phases, the highest priority wins. Overlapping
+    /// shapes of different phases with equal priority are an error: nothing says which wins.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub priority: i64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub center: Option<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -255,10 +265,24 @@ pub struct ShapeSpec {
     /// `wave` only: wavelength (m) of the cosine displacement along x.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wavelength: Option<f64>,
+    /// `mesh` only: OBJ file, relative to the scene file's folder (or absolute; `builtin:NAME`
+    /// names one shipped with the built-in scenes). The resolved scene holds the absolute path.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// `mesh` only: uniform scale applied to the OBJ's coordinates (default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+    /// `mesh` only: offset added to the OBJ's coordinates after scaling (default zero).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub translate: Option<[f64; 3]>,
     /// Half-spaces intersected with the shape (keep the side the normal points away from):
     /// cuts a sphere into halves or wedges.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub clip: Vec<HalfSpaceSpec>,
+}
+
+fn is_zero(v: &i64) -> bool {
+    *v == 0
 }
 
 /// A plane through `point`; the kept side is the one `normal` points away from.
@@ -267,4 +291,9 @@ pub struct ShapeSpec {
 pub struct HalfSpaceSpec {
     pub point: [f64; 3],
     pub normal: [f64; 3],
+}
+
+/// serde's default for switches that are on unless a scene turns them off.
+fn default_true() -> bool {
+    true
 }

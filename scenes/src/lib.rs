@@ -5,6 +5,10 @@
 pub mod builtin;
 pub mod error;
 pub mod format;
+pub mod mesh_file;
+pub mod mesh_sdf;
+pub mod obj;
+pub mod overlap;
 pub mod scene;
 pub mod shapes;
 pub mod velocity;

@@ -1,10 +1,15 @@
 //! A validated scene: the resolved file plus everything derived from it (grid, shapes, flow).
 
+use std::sync::Arc;
+
 use glam::DVec3;
 use polyphase_grid::{GridSpec, PhaseId};
 
 use crate::error::SceneError;
 use crate::format::{HalfSpaceSpec, SceneFile, ShapeSpec, SolverSpec, VelocitySpec};
+use crate::mesh_file::SceneBase;
+use crate::mesh_sdf::MeshSdf;
+use crate::overlap::{find_ambiguous_overlap, DEFAULT_DEPTH as OVERLAP_DEPTH};
 use crate::shapes::{InitialPhases, Primitive, Shape};
 use crate::velocity::AnalyticVelocity;
 
@@ -28,7 +33,8 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Parses and validates TOML text; `origin` (a path or `builtin:NAME`) prefixes every error.
+    /// Parses and validates TOML text; `origin` (a path or `builtin:NAME`) prefixes every error,
+    /// and relative OBJ paths of mesh shapes are read from its folder.
     pub fn parse(text: &str, origin: &str) -> Result<Scene, SceneError> {
         let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
             origin: origin.to_string(),
@@ -37,7 +43,8 @@ impl Scene {
         Scene::from_file(file, origin)
     }
 
-    /// Validates a parsed file.
+    /// Validates a parsed file (`origin` as in [`Scene::parse`]). Mesh shapes' OBJ paths are
+    /// written back resolved (absolute, or `builtin:NAME`).
     pub fn from_file(mut file: SceneFile, origin: &str) -> Result<Scene, SceneError> {
         let bad = |place: &str, message: String| SceneError::Invalid {
             origin: origin.to_string(),
@@ -90,20 +97,38 @@ impl Scene {
                 })
         };
         let background = find(&file.background, "background")?;
-        let shapes = file
+        let base = SceneBase::from_origin(origin);
+        let mut shapes = file
             .shapes
-            .iter()
+            .iter_mut()
             .enumerate()
             .map(|(i, s)| {
                 let place = format!("shapes[{i}]");
                 Ok(Shape {
                     phase: find(&s.phase, &format!("{place}.phase"))?,
-                    primitive: compile_primitive(s, &place, &bad)?,
+                    priority: s.priority,
+                    primitive: compile_primitive(s, &place, &base, &bad)?,
                     clip: compile_clip(&s.clip, &place, &bad)?,
                 })
             })
             .collect::<Result<Vec<_>, SceneError>>()?;
         let (grid, solver_grid) = snap_grid(&mut file, ratio);
+        if let Some((i, j, x)) =
+            find_ambiguous_overlap(&shapes, grid.origin, grid.upper(), OVERLAP_DEPTH)
+        {
+            let (a, b) = (&file.shapes[i], &file.shapes[j]);
+            return Err(bad(
+                &format!("shapes[{j}]"),
+                format!(
+                    "overlaps shapes[{i}] near ({:.4}, {:.4}, {:.4}), and their phases ('{}', '{}') \
+                     have the same priority {}: give the one that should fill the overlap a higher \
+                     `priority`",
+                    x.x, x.y, x.z, b.phase, a.phase, a.priority
+                ),
+            ));
+        }
+        // Painting order: a later shape wins, so ascending priority (stable: file order among equals).
+        shapes.sort_by_key(|s| s.priority);
         Ok(Scene {
             file,
             grid,
@@ -136,12 +161,25 @@ impl Scene {
 
     /// Exact per-phase volumes of the initial shapes (the reference for volume drift).
     pub fn reference_volumes(&self) -> Vec<f64> {
-        crate::volume::reference_volumes(
-            &self.initial,
-            &self.grid,
-            self.file.phases.len(),
-            crate::volume::DEFAULT_DEPTH,
-        )
+        let has_mesh = self
+            .initial
+            .shapes
+            .iter()
+            .any(|s| matches!(s.primitive, Primitive::Mesh(_)));
+        let depth = if has_mesh {
+            crate::volume::MESH_DEPTH
+        } else {
+            crate::volume::DEFAULT_DEPTH
+        };
+        crate::volume::reference_volumes(&self.initial, &self.grid, self.file.phases.len(), depth)
+    }
+
+    /// The volumes the tracker corrects each phase back to: the exact initial ones, or `None`
+    /// when the scene turns `volume_correction` off.
+    pub fn volume_targets(&self) -> Option<Vec<f64>> {
+        self.file
+            .volume_correction
+            .then(|| self.reference_volumes())
     }
 
     /// Phase names in id order.
@@ -346,7 +384,12 @@ fn compile_phases(file: &SceneFile, bad: &Bad) -> Result<Vec<String>, SceneError
     Ok(names)
 }
 
-fn compile_primitive(s: &ShapeSpec, place: &str, bad: &Bad) -> Result<Primitive, SceneError> {
+fn compile_primitive(
+    s: &mut ShapeSpec,
+    place: &str,
+    base: &SceneBase,
+    bad: &Bad,
+) -> Result<Primitive, SceneError> {
     let need3 = |v: Option<[f64; 3]>, field: &str| -> Result<[f64; 3], SceneError> {
         v.ok_or_else(|| {
             bad(
@@ -396,13 +439,41 @@ fn compile_primitive(s: &ShapeSpec, place: &str, bad: &Bad) -> Result<Primitive,
                 wavelength: positive(wavelength, &format!("{place}.wavelength"), bad)?,
             }
         }
+        "mesh" => compile_mesh(s, place, base, bad)?,
         other => {
             return Err(bad(
                 &format!("{place}.kind"),
-                format!("unknown shape kind '{other}' (sphere, cylinder, box, half_space, wave)"),
+                format!(
+                    "unknown shape kind '{other}' (sphere, cylinder, box, half_space, wave, mesh)"
+                ),
             ))
         }
     })
+}
+
+/// Reads, checks and prepares a mesh shape's OBJ; writes its resolved name back into `s`.
+fn compile_mesh(
+    s: &mut ShapeSpec,
+    place: &str,
+    base: &SceneBase,
+    bad: &Bad,
+) -> Result<Primitive, SceneError> {
+    let file = s
+        .file
+        .as_deref()
+        .ok_or_else(|| bad(place, "kind 'mesh' needs the field 'file'".into()))?;
+    let scale = positive(s.scale.unwrap_or(1.0), &format!("{place}.scale"), bad)?;
+    let translate = check_vec(
+        &s.translate.unwrap_or([0.0; 3]),
+        &format!("{place}.translate"),
+        bad,
+    )?;
+    let at = format!("{place}.file");
+    let (resolved, bytes) = crate::mesh_file::read(file, base).map_err(|m| bad(&at, m))?;
+    let mesh = crate::obj::parse_obj(&bytes, scale, translate)
+        .map_err(|e| bad(&at, format!("{resolved}: {e}")))?;
+    s.file = Some(resolved);
+    Ok(Primitive::Mesh(Arc::new(MeshSdf::new(&mesh))))
 }
 
 fn compile_clip(

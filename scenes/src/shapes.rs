@@ -1,9 +1,13 @@
-//! Initial shapes: primitives with signed distances, clipped by half-spaces, painted in order.
-//! Their union gives the initial phase χ exactly and a lower bound on the distance φ to the
-//! interface, which is all the contouring tracker needs to build its first mesh.
+//! Initial shapes: primitives with signed distances, clipped by half-spaces, painted in order
+//! of priority. Their union gives the initial phase χ exactly and a lower bound on the distance
+//! φ to the interface, which is all the contouring tracker needs to build its first mesh.
+
+use std::sync::Arc;
 
 use glam::DVec3;
 use polyphase_grid::PhaseId;
+
+use crate::mesh_sdf::MeshSdf;
 
 /// A solid primitive; `sdf` is negative inside.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,6 +38,8 @@ pub enum Primitive {
         amplitude: f64,
         wavelength: f64,
     },
+    /// The inside of a closed triangle mesh (from an OBJ file); shared, as it can be large.
+    Mesh(Arc<MeshSdf>),
 }
 
 impl Primitive {
@@ -61,6 +67,7 @@ impl Primitive {
                 let d = (x - point).dot(normal) - amplitude * (k * (x.x - point.x)).cos();
                 d / (1.0 + (k * amplitude).powi(2)).sqrt()
             }
+            Primitive::Mesh(ref mesh) => mesh.sdf(x),
         }
     }
 }
@@ -69,6 +76,8 @@ impl Primitive {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Shape {
     pub phase: PhaseId,
+    /// Wins over shapes of lower priority where they overlap (scene file `priority`).
+    pub priority: i64,
     pub primitive: Primitive,
     /// (point, unit normal): keep the side the normal points away from.
     pub clip: Vec<(DVec3, DVec3)>,
@@ -88,6 +97,8 @@ impl Shape {
 #[derive(Clone, Debug, PartialEq)]
 pub struct InitialPhases {
     pub background: PhaseId,
+    /// In painting order (a later shape wins where shapes overlap): ascending priority, file
+    /// order among equals ([`crate::Scene`] sorts them so).
     pub shapes: Vec<Shape>,
 }
 
@@ -151,6 +162,7 @@ mod tests {
     fn painter_order_and_distance_bound() {
         let sphere = Shape {
             phase: 1,
+            priority: 0,
             primitive: Primitive::Sphere {
                 center: DVec3::splat(0.5),
                 radius: 0.25,

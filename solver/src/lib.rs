@@ -30,4 +30,4 @@ pub use linalg::pcg::SolveStats;
 pub use mac::MacGrid;
 pub use phase::PhaseProps;
 pub use solid::{SignedDistance, Solid};
-pub use solver::{BodyForce, Solver, StepReport, StepTimings};
+pub use solver::{BodyForce, Solver, SolverState, StepReport, StepTimings};

@@ -48,6 +48,18 @@ pub struct StepReport {
     pub timings: StepTimings,
 }
 
+/// Everything a step reads or writes besides the configuration (which also fixes the solid
+/// fractions): what a checkpoint must hold to continue bit for bit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolverState {
+    /// Simulated time (s).
+    pub time: f64,
+    /// Face velocities per component, as [`MacGrid::component`] lays them out.
+    pub velocity: [Vec<f64>; 3],
+    /// Cell-centre pressure of the last projection.
+    pub pressure: Vec<f64>,
+}
+
 /// The MAC-grid multiphase solver.
 #[derive(Clone, Debug)]
 pub struct Solver {
@@ -106,6 +118,33 @@ impl Solver {
     /// Simulated time (s).
     pub fn time(&self) -> f64 {
         self.time
+    }
+
+    /// A copy of the evolving state (for checkpoints).
+    pub fn state(&self) -> SolverState {
+        SolverState {
+            time: self.time,
+            velocity: self.velocity.comps.clone(),
+            pressure: self.pressure.clone(),
+        }
+    }
+
+    /// Puts back a state taken by [`Solver::state`] from a solver of the same configuration;
+    /// arrays of the wrong size are refused and leave the solver untouched.
+    pub fn restore(&mut self, state: SolverState) -> Result<(), SolverError> {
+        let sizes = |v: &[Vec<f64>; 3], p: &[f64]| [v[0].len(), v[1].len(), v[2].len(), p.len()];
+        let expected = sizes(&self.velocity.comps, &self.pressure);
+        let found = sizes(&state.velocity, &state.pressure);
+        if expected != found {
+            return Err(SolverError::GridMismatch {
+                expected: format!("u, v, w, p sizes {expected:?}"),
+                found: format!("{found:?}"),
+            });
+        }
+        self.time = state.time;
+        self.velocity.comps = state.velocity;
+        self.pressure = state.pressure;
+        Ok(())
     }
 
     /// Open (non-solid) fraction of each face of component `a`; 0 on domain walls.

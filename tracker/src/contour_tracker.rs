@@ -13,6 +13,7 @@ use crate::contour::{MdTree, PhaseSampler};
 use crate::mesh::LabeledMesh;
 use crate::query::MeshQuery;
 use crate::tracker::{InterfaceTracker, StepStats, TrackerError};
+use crate::volume_correction::VolumeShift;
 
 /// Tracker state: the current mesh, its exact query structure and the redistanced tree.
 pub struct ContourTracker {
@@ -22,6 +23,8 @@ pub struct ContourTracker {
     tree: MdTree,
     mesh: LabeledMesh,
     query: MeshQuery,
+    /// Phase volumes each step's mesh is corrected back to; `None` turns the correction off.
+    volume_targets: Option<Vec<f64>>,
 }
 
 impl ContourTracker {
@@ -34,6 +37,7 @@ impl ContourTracker {
         background: PhaseId,
     ) -> (ContourTracker, StepStats) {
         let (tree, mesh, query, stats) = rebuild(&grid, initial, background);
+        let volume_targets = Some(mesh.phase_volumes(n_phases));
         let tracker = ContourTracker {
             grid,
             n_phases,
@@ -41,8 +45,48 @@ impl ContourTracker {
             tree,
             mesh,
             query,
+            volume_targets,
         };
         (tracker, stats)
+    }
+
+    /// A tracker from the saved state of another (a checkpoint): its mesh, its redistanced
+    /// tree and volume targets. It continues exactly as the one they were taken from.
+    pub fn from_parts(
+        grid: GridSpec,
+        mesh: LabeledMesh,
+        tree: MdTree,
+        n_phases: usize,
+        background: PhaseId,
+        volume_targets: Option<Vec<f64>>,
+    ) -> ContourTracker {
+        let query = MeshQuery::new(&mesh, background);
+        ContourTracker {
+            grid,
+            n_phases,
+            background,
+            tree,
+            mesh,
+            query,
+            volume_targets,
+        }
+    }
+
+    /// The redistanced tree that answers [`ContourTracker::phi_chi`] away from the interface.
+    pub fn tree(&self) -> &MdTree {
+        &self.tree
+    }
+
+    /// Sets the per-phase volumes every step's mesh is corrected back to (see
+    /// [`crate::volume_correction`]); `None` switches the correction off. By default the
+    /// targets are the first mesh's volumes.
+    pub fn set_volume_targets(&mut self, targets: Option<Vec<f64>>) {
+        self.volume_targets = targets;
+    }
+
+    /// The volumes the correction restores, if it is on.
+    pub fn volume_targets(&self) -> Option<&[f64]> {
+        self.volume_targets.as_deref()
     }
 
     /// The tracker's grid.
@@ -110,6 +154,8 @@ struct Departure<'a> {
     t: f64,
     dt: f64,
     bad: &'a AtomicBool,
+    /// Interface offsets of the volume correction, if it is on.
+    shift: Option<VolumeShift>,
 }
 
 impl PhaseSampler for Departure<'_> {
@@ -119,7 +165,13 @@ impl PhaseSampler for Departure<'_> {
             self.bad.store(true, Ordering::Relaxed);
             return (0.0, 0);
         }
-        let n = self.previous.query_curved(x0.clamp(self.lo, self.hi));
+        let x0 = x0.clamp(self.lo, self.hi);
+        let n = match &self.shift {
+            Some(shift) => self
+                .previous
+                .query_shifted(x0, &|front, back| shift.shift(front, back)),
+            None => self.previous.query_curved(x0),
+        };
         (n.distance, n.phase)
     }
 }
@@ -140,6 +192,10 @@ impl InterfaceTracker for ContourTracker {
             t,
             dt,
             bad: &bad,
+            // A quarter cell per step at most: a sheet lost in one step comes back over a few.
+            shift: self.volume_targets.as_ref().map(|targets| {
+                VolumeShift::new(&self.mesh, targets, self.background, 0.25 * self.grid.h)
+            }),
         };
         let (tree, mesh, query, stats) = rebuild(&self.grid, &departure, self.background);
         if bad.load(Ordering::Relaxed) {

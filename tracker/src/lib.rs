@@ -12,6 +12,7 @@ pub mod query;
 pub mod redistance;
 pub mod sampling;
 pub mod tracker;
+pub mod volume_correction;
 
 pub use contour::{MdTree, PhaseSampler};
 pub use contour_tracker::ContourTracker;

@@ -179,6 +179,13 @@ impl MeshQuery {
     /// paper's text does not address. Corners whose smooth normal is more than 25° from the
     /// facet's (sharp features, junction lines) keep the flat facet there, so features stay sharp.
     pub fn query_curved(&self, x: DVec3) -> Nearest {
+        self.query_shifted(x, &|_, _| 0.0)
+    }
+
+    /// [`MeshQuery::query_curved`] with every interface moved along its normal, towards its
+    /// front phase, by `shift(front, back)` (negative: towards the back phase), as a level-set
+    /// offset of the signed distance: the volume correction of [`crate::volume_correction`].
+    pub fn query_shifted(&self, x: DVec3, shift: &dyn Fn(PhaseId, PhaseId) -> f64) -> Nearest {
         let Some((n, _, t)) = self.locate(x, f64::INFINITY) else {
             return self.query(x);
         };
@@ -191,7 +198,7 @@ impl MeshQuery {
             return n;
         };
         let normal = self.tris[t].normal;
-        let bulge = self.bulge(t, n.point);
+        let bulge = self.bulge(t, n.point) + shift(front, back);
         let curved = signed - bulge;
         Nearest {
             distance: curved.abs(),

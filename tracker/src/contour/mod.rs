@@ -21,11 +21,13 @@
 //! - `closure`: the domain boundary, conforming to hanging nodes of coarse leaves.
 //! - `extract`: keys sorted before positions are computed, so the output is identical for any
 //!   thread count.
+//! - `persist`: an exact byte image of the tree, so a checkpointed tracker restarts bit for bit.
 
 mod bisect;
 mod closure;
 mod extract;
 pub(crate) mod nodes;
+mod persist;
 mod sampler;
 mod stencils;
 pub(crate) mod tree;
@@ -33,5 +35,6 @@ pub(crate) mod tree;
 #[cfg(test)]
 mod tests;
 
+pub use persist::TreeDecodeError;
 pub use sampler::PhaseSampler;
 pub use tree::MdTree;

@@ -1,0 +1,333 @@
+//! Contact detection for a whole mesh motion ([`detect`]) and for the local pseudo-motions of
+//! remeshing ([`local_motion_is_safe`]): broad phase on swept boxes, then the conservative CCD
+//! of [`super::ccd`] on every vertex–triangle and edge–edge pair that shares no vertex.
+
+use super::broadphase::{StaticGrid, TriangleGrid};
+use super::ccd::{self, boxes_overlap};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// A (possible) contact during a motion: a vertex against a triangle (by index), or two edges
+/// given by their vertices (each `[lo, hi]`, and `a < b` lexicographically).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Contact {
+    VertexTriangle { vertex: u32, triangle: u32 },
+    EdgeEdge { a: [u32; 2], b: [u32; 2] },
+}
+
+/// A removed triangle slot ([`super::connectivity::DEAD`]): every function of the collision
+/// modules skips such entries, so callers may pass a triangle list with holes.
+pub fn is_removed(tri: &[u32; 3]) -> bool {
+    *tri == super::connectivity::DEAD
+}
+
+/// The unique edges of a triangle list, sorted, and for each triangle the indices of its
+/// three edges (edge `k` joins corners `k` and `k + 1`; `u32::MAX` for removed triangles).
+pub fn edges_of(triangles: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<[u32; 3]>) {
+    let mut all: Vec<([u32; 2], u32)> = triangles
+        .par_iter()
+        .enumerate()
+        .filter(|(_, tri)| !is_removed(tri))
+        .flat_map_iter(|(t, tri)| {
+            (0..3).map(move |k| {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                ([a.min(b), a.max(b)], (3 * t + k) as u32)
+            })
+        })
+        .collect();
+    all.par_sort_unstable();
+    let mut edges: Vec<[u32; 2]> = Vec::with_capacity(all.len() / 2 + 1);
+    let mut tri_edges = vec![[u32::MAX; 3]; triangles.len()];
+    for (e, slot) in all {
+        if edges.last() != Some(&e) {
+            edges.push(e);
+        }
+        tri_edges[slot as usize / 3][slot as usize % 3] = (edges.len() - 1) as u32;
+    }
+    (edges, tri_edges)
+}
+
+fn sweep_box(points: impl Iterator<Item = DVec3>) -> (DVec3, DVec3) {
+    points.fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(p), hi.max(p)),
+    )
+}
+
+/// Box of triangle `tri` swept from `x0` to `x1`; empty (`lo = +∞`, `hi = −∞`, overlapping
+/// nothing) for a removed triangle.
+pub fn swept_triangle_box(tri: &[u32; 3], x0: &[DVec3], x1: &[DVec3]) -> (DVec3, DVec3) {
+    if is_removed(tri) {
+        return sweep_box(std::iter::empty());
+    }
+    sweep_box(tri.iter().flat_map(|&v| [x0[v as usize], x1[v as usize]]))
+}
+
+/// Cell size for a grid of the given boxes: 1.5 times their mean largest extent (deterministic:
+/// summed in index order), so that a typical box spans one or two cells per axis.
+pub fn cell_size_for(boxes: &[(DVec3, DVec3)]) -> f64 {
+    let sum: f64 = boxes.iter().map(|(l, h)| (*h - *l).max_element()).sum();
+    1.5 * sum / boxes.len().max(1) as f64
+}
+
+fn shares_vertex(a: &[u32], b: &[u32]) -> bool {
+    a.iter().any(|x| b.contains(x))
+}
+
+/// Every contact of the linear motion `x0 → x1` of the mesh `triangles` (vertex–triangle and
+/// edge–edge pairs sharing a vertex are skipped): vertex–triangle contacts sorted by vertex
+/// then triangle, then edge–edge contacts sorted by edge. The same on any number of threads.
+pub fn detect(triangles: &[[u32; 3]], x0: &[DVec3], x1: &[DVec3]) -> Vec<Contact> {
+    Detector::new(triangles, x0.len()).detect(x0, x1)
+}
+
+/// The topology [`detect`] needs, built once for repeated detections on the same triangles
+/// (as in collision response iterations): edges, used vertices, and an owner triangle for
+/// every vertex and edge (the lowest-index triangle containing it). Each primitive pair is
+/// tested exactly once, from the pair of its owners: a primitive's swept box lies inside its
+/// owner's, so overlapping primitive boxes imply overlapping owner boxes.
+pub struct Detector<'a> {
+    triangles: &'a [[u32; 3]],
+    vertices: Vec<u32>,
+    edges: Vec<[u32; 2]>,
+    tri_edges: Vec<[u32; 3]>,
+    vertex_owner: Vec<u32>,
+    edge_owner: Vec<u32>,
+}
+
+impl<'a> Detector<'a> {
+    /// Topology of `triangles` over `n_vertices` vertices (indices must be in range).
+    pub fn new(triangles: &'a [[u32; 3]], n_vertices: usize) -> Self {
+        let mut vertex_owner = vec![u32::MAX; n_vertices];
+        for (t, tri) in triangles.iter().enumerate().rev() {
+            if is_removed(tri) {
+                continue;
+            }
+            for &v in tri {
+                vertex_owner[v as usize] = t as u32;
+            }
+        }
+        let vertices = (0..n_vertices as u32)
+            .filter(|&v| vertex_owner[v as usize] != u32::MAX)
+            .collect();
+        let (edges, tri_edges) = edges_of(triangles);
+        let mut edge_owner = vec![u32::MAX; edges.len()];
+        for (t, te) in tri_edges.iter().enumerate().rev() {
+            if is_removed(&triangles[t]) {
+                continue;
+            }
+            for &e in te {
+                edge_owner[e as usize] = t as u32;
+            }
+        }
+        Detector {
+            triangles,
+            vertices,
+            edges,
+            tri_edges,
+            vertex_owner,
+            edge_owner,
+        }
+    }
+
+    /// The unique edges, sorted.
+    pub fn edges(&self) -> &[[u32; 2]] {
+        &self.edges
+    }
+
+    /// The vertices used by some triangle, ascending.
+    pub fn vertices(&self) -> &[u32] {
+        &self.vertices
+    }
+
+    /// Edge indices of each triangle.
+    pub fn tri_edges(&self) -> &[[u32; 3]] {
+        &self.tri_edges
+    }
+
+    /// [`detect`] for the motion `x0 → x1`: every triangle queries the grid of swept boxes once;
+    /// for each overlapping triangle it tests its own vertices against that triangle and, for
+    /// higher-index triangles, its own edges against that triangle's own edges.
+    pub fn detect(&self, x0: &[DVec3], x1: &[DVec3]) -> Vec<Contact> {
+        let triangles = self.triangles;
+        let boxes: Vec<(DVec3, DVec3)> = triangles
+            .par_iter()
+            .map(|t| swept_triangle_box(t, x0, x1))
+            .collect();
+        let cell = cell_size_for(&boxes);
+        let grid = StaticGrid::build(boxes, cell);
+        let edge_boxes: Vec<(DVec3, DVec3)> = self
+            .edges
+            .par_iter()
+            .map(|e| sweep_box(e.iter().flat_map(|&v| [x0[v as usize], x1[v as usize]])))
+            .collect();
+        let per_triangle: Vec<(Vec<Contact>, Vec<Contact>)> = (0..triangles.len() as u32)
+            .into_par_iter()
+            .map_init(Vec::new, |cand, t| {
+                let tri = triangles[t as usize];
+                if is_removed(&tri) {
+                    return (Vec::new(), Vec::new());
+                }
+                let own_vertices: Vec<u32> = tri
+                    .iter()
+                    .copied()
+                    .filter(|&v| self.vertex_owner[v as usize] == t)
+                    .collect();
+                let own_edges: Vec<u32> = self.tri_edges[t as usize]
+                    .iter()
+                    .copied()
+                    .filter(|&e| self.edge_owner[e as usize] == t)
+                    .collect();
+                let (mut vt, mut ee) = (Vec::new(), Vec::new());
+                if own_vertices.is_empty() && own_edges.is_empty() {
+                    return (vt, ee);
+                }
+                let (lo, hi) = grid.boxes()[t as usize];
+                grid.query(lo, hi, cand);
+                for &s in cand.iter() {
+                    if s == t {
+                        continue;
+                    }
+                    let other = triangles[s as usize];
+                    let (slo, shi) = grid.boxes()[s as usize];
+                    for &v in &own_vertices {
+                        let (p, q) = (x0[v as usize], x1[v as usize]);
+                        if !other.contains(&v)
+                            && boxes_overlap(p.min(q), p.max(q), slo, shi)
+                            && vertex_triangle_moves_into(v, &other, x0, x1)
+                        {
+                            vt.push(Contact::VertexTriangle {
+                                vertex: v,
+                                triangle: s,
+                            });
+                        }
+                    }
+                    if s < t {
+                        continue;
+                    }
+                    for &e in &own_edges {
+                        let ea = self.edges[e as usize];
+                        let (elo, ehi) = edge_boxes[e as usize];
+                        for &f in &self.tri_edges[s as usize] {
+                            if self.edge_owner[f as usize] != s {
+                                continue;
+                            }
+                            let eb = self.edges[f as usize];
+                            let (flo, fhi) = edge_boxes[f as usize];
+                            if !shares_vertex(&ea, &eb)
+                                && boxes_overlap(elo, ehi, flo, fhi)
+                                && edge_edge_moves_into(&ea, &eb, x0, x1)
+                            {
+                                ee.push(Contact::EdgeEdge {
+                                    a: ea.min(eb),
+                                    b: ea.max(eb),
+                                });
+                            }
+                        }
+                    }
+                }
+                (vt, ee)
+            })
+            .collect();
+        let (mut vt, mut ee): (Vec<Contact>, Vec<Contact>) = (Vec::new(), Vec::new());
+        for (a, b) in per_triangle {
+            vt.extend(a);
+            ee.extend(b);
+        }
+        vt.par_sort_unstable();
+        ee.par_sort_unstable();
+        vt.extend(ee);
+        vt
+    }
+}
+
+fn gather(ids: [u32; 4], x: &[DVec3]) -> [DVec3; 4] {
+    ids.map(|i| x[i as usize])
+}
+
+/// CCD of vertex `v` against triangle `tri` under `x0 → x1`.
+pub fn vertex_triangle_moves_into(v: u32, tri: &[u32; 3], x0: &[DVec3], x1: &[DVec3]) -> bool {
+    let ids = [v, tri[0], tri[1], tri[2]];
+    ccd::vertex_triangle(&gather(ids, x0), &gather(ids, x1))
+}
+
+/// CCD of edge `a` against edge `b` under `x0 → x1`.
+pub fn edge_edge_moves_into(a: &[u32; 2], b: &[u32; 2], x0: &[DVec3], x1: &[DVec3]) -> bool {
+    let ids = [a[0], a[1], b[0], b[1]];
+    ccd::edge_edge(&gather(ids, x0), &gather(ids, x1))
+}
+
+/// Any contact between the primitives of triangles `t` and `s` (pairs sharing a vertex skipped).
+fn triangle_pair_collides(t: &[u32; 3], s: &[u32; 3], x0: &[DVec3], x1: &[DVec3]) -> bool {
+    let vt = |p: &[u32; 3], q: &[u32; 3]| {
+        p.iter()
+            .any(|&v| !q.contains(&v) && vertex_triangle_moves_into(v, q, x0, x1))
+    };
+    if vt(t, s) || vt(s, t) {
+        return true;
+    }
+    (0..3).any(|i| {
+        let ea = [t[i], t[(i + 1) % 3]];
+        (0..3).any(|j| {
+            let eb = [s[j], s[(j + 1) % 3]];
+            !shares_vertex(&ea, &eb) && edge_edge_moves_into(&ea, &eb, x0, x1)
+        })
+    })
+}
+
+/// `true` if moving the vertices `moving` from `x0` to `x1` (every other vertex must have
+/// `x1 == x0`) creates no contact between primitives of `triangles` that share no vertex.
+/// Meant for remeshing pseudo-motions (Brochu and Bridson 2009; paper 000 App. A).
+///
+/// Requirements: every entry of `triangles` is a live triangle, and `grid` holds exactly these
+/// triangles, each with a box containing its corners at `x0` (a triangle incident to a moving
+/// vertex is found through the grid at that vertex's `x0`). Moving triangles (those with a
+/// moving vertex) are tested against the grid with their swept boxes and against each other.
+pub fn local_motion_is_safe(
+    grid: &TriangleGrid,
+    triangles: &[[u32; 3]],
+    x0: &[DVec3],
+    x1: &[DVec3],
+    moving: &[u32],
+) -> bool {
+    let mut cand = Vec::new();
+    let mut moving_tris: Vec<u32> = Vec::new();
+    for &v in moving {
+        let p = x0[v as usize];
+        grid.query(p, p, &mut cand);
+        moving_tris.extend(cand.iter().copied().filter(|&t| {
+            triangles
+                .get(t as usize)
+                .is_some_and(|tri| tri.contains(&v))
+        }));
+    }
+    moving_tris.sort_unstable();
+    moving_tris.dedup();
+    for (i, &t) in moving_tris.iter().enumerate() {
+        let tri = triangles[t as usize];
+        let (lo, hi) = swept_triangle_box(&tri, x0, x1);
+        grid.query(lo, hi, &mut cand);
+        for &s in &cand {
+            if moving_tris.binary_search(&s).is_ok() {
+                continue;
+            }
+            let Some(other) = triangles.get(s as usize).filter(|t| !is_removed(t)) else {
+                continue;
+            };
+            if triangle_pair_collides(&tri, other, x0, x1) {
+                return false;
+            }
+        }
+        for &s in &moving_tris[i + 1..] {
+            let other = triangles[s as usize];
+            let (olo, ohi) = swept_triangle_box(&other, x0, x1);
+            if boxes_overlap(lo, hi, olo, ohi) && triangle_pair_collides(&tri, &other, x0, x1) {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,178 @@
+//! Tests of [`super::detect`] and [`super::local_motion_is_safe`] against brute force.
+
+use super::*;
+use crate::front::predicates::tests::Rng;
+use crate::mesh::fixtures::icosphere;
+use crate::LabeledMesh;
+use std::collections::BTreeSet;
+
+fn two_spheres(gap: f64, level: u32) -> LabeledMesh {
+    let mut m = icosphere(DVec3::new(-0.25 - gap / 2.0, 0.0, 0.0), 0.25, level, 1, 0);
+    m.append(&icosphere(
+        DVec3::new(0.25 + gap / 2.0, 0.0, 0.0),
+        0.25,
+        level,
+        2,
+        0,
+    ));
+    m
+}
+
+/// All pairs, no broad phase.
+fn brute_force(triangles: &[[u32; 3]], x0: &[DVec3], x1: &[DVec3]) -> BTreeSet<Contact> {
+    let mut out = BTreeSet::new();
+    let (edges, _) = edges_of(triangles);
+    for v in 0..x0.len() as u32 {
+        for (t, tri) in triangles.iter().enumerate() {
+            if !tri.contains(&v) && vertex_triangle_moves_into(v, tri, x0, x1) {
+                out.insert(Contact::VertexTriangle {
+                    vertex: v,
+                    triangle: t as u32,
+                });
+            }
+        }
+    }
+    for (i, a) in edges.iter().enumerate() {
+        for b in &edges[i + 1..] {
+            if !shares_vertex(a, b) && edge_edge_moves_into(a, b, x0, x1) {
+                out.insert(Contact::EdgeEdge { a: *a, b: *b });
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn detect_matches_brute_force_and_is_sorted() {
+    let m = two_spheres(0.02, 2);
+    let x0 = m.vertices.clone();
+    let n = x0.len();
+    let mut rng = Rng(21);
+    // The left sphere moves right into the right one, with some jitter everywhere.
+    let x1: Vec<DVec3> = (0..n)
+        .map(|i| {
+            let push = if x0[i].x < 0.0 {
+                DVec3::new(0.08, 0.0, 0.0)
+            } else {
+                DVec3::ZERO
+            };
+            x0[i] + push + 0.003 * rng.v()
+        })
+        .collect();
+    let found = detect(&m.triangles, &x0, &x1);
+    let mut sorted = found.clone();
+    sorted.sort();
+    assert_eq!(found, sorted);
+    let expected = brute_force(&m.triangles, &x0, &x1);
+    assert!(!expected.is_empty());
+    assert_eq!(found.iter().copied().collect::<BTreeSet<_>>(), expected);
+    // Removed slots (connectivity::DEAD) anywhere in the list are ignored.
+    let mut holes = m.triangles.clone();
+    holes.push(crate::front::connectivity::DEAD);
+    assert_eq!(detect(&holes, &x0, &x1), found);
+    // Static and a tiny motion: nothing.
+    assert!(detect(&m.triangles, &x0, &x0).is_empty());
+    let small: Vec<DVec3> = x0.iter().map(|&p| p + 1e-4 * rng.v()).collect();
+    assert!(detect(&m.triangles, &x0, &small).is_empty());
+}
+
+#[test]
+fn detect_is_identical_on_one_and_two_threads() {
+    let m = two_spheres(0.01, 2);
+    let x0 = m.vertices.clone();
+    let mut rng = Rng(4);
+    let x1: Vec<DVec3> = x0.iter().map(|&p| p + 0.06 * rng.v()).collect();
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool")
+            .install(|| detect(&m.triangles, &x0, &x1))
+    };
+    let one = run(1);
+    assert!(!one.is_empty());
+    assert_eq!(one, run(2));
+}
+
+#[test]
+fn local_motion_agrees_with_full_detection() {
+    let m = two_spheres(0.01, 2);
+    let x0 = m.vertices.clone();
+    let mut grid = TriangleGrid::new(0.1);
+    for (t, tri) in m.triangles.iter().enumerate() {
+        let (lo, hi) = swept_triangle_box(tri, &x0, &x0);
+        grid.insert(t as u32, lo, hi);
+    }
+    let mut rng = Rng(8);
+    let (mut safe, mut unsafe_) = (0, 0);
+    for _ in 0..300 {
+        // Move one or two random vertices by up to 0.2 (three edge lengths): often into the other sphere or
+        // through a neighbouring face, often harmlessly.
+        let k = 1 + (rng.next_u64() % 2) as usize;
+        let moving: Vec<u32> = (0..k)
+            .map(|_| (rng.next_u64() % x0.len() as u64) as u32)
+            .collect();
+        let mut x1 = x0.clone();
+        for &v in &moving {
+            x1[v as usize] += 0.2 * rng.v();
+        }
+        let expected = detect(&m.triangles, &x0, &x1).is_empty();
+        assert_eq!(
+            local_motion_is_safe(&grid, &m.triangles, &x0, &x1, &moving),
+            expected
+        );
+        if expected {
+            safe += 1
+        } else {
+            unsafe_ += 1
+        }
+    }
+    assert!(safe > 20 && unsafe_ > 20, "{safe} {unsafe_}");
+}
+
+/// Micro-benchmark (run with `--ignored --nocapture`): `detect` and the intersection checker
+/// on icospheres of about 24k and 120k triangles under a small random motion (a tenth of the
+/// mean edge length). Prints timings; asserts only that the motion is contact-free.
+#[test]
+#[ignore]
+fn bench_detect() {
+    use crate::front::intersection::self_intersections;
+    use std::time::Instant;
+    for (levels, label) in [(vec![5, 4], "~24k"), (vec![6, 5, 5], "~120k")] {
+        let mut m = LabeledMesh::default();
+        for (i, &level) in levels.iter().enumerate() {
+            let c = DVec3::new(1.1 * i as f64, 0.0, 0.0);
+            m.append(&icosphere(c, 0.5, level, 1 + i as u16, 0));
+        }
+        let x0 = m.vertices.clone();
+        let edge = (x0[m.triangles[0][0] as usize] - x0[m.triangles[0][1] as usize]).length();
+        let mut rng = Rng(1);
+        let x1: Vec<DVec3> = x0.iter().map(|&p| p + 0.1 * edge * rng.v()).collect();
+        // Process CPU time (Linux, clock ticks of 10 ms) next to wall time: the shared
+        // machine's load makes wall time alone meaningless.
+        let cpu = || {
+            std::fs::read_to_string("/proc/self/stat")
+                .ok()
+                .and_then(|s| {
+                    let f: Vec<&str> = s.rsplit(')').next()?.split_whitespace().collect();
+                    Some(f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?)
+                })
+                .map_or(f64::NAN, |ticks| ticks * 10.0)
+        };
+        let (start, c0) = (Instant::now(), cpu());
+        let contacts = detect(&m.triangles, &x0, &x1);
+        let (t_detect, c_detect) = (start.elapsed(), cpu() - c0);
+        let (start, c0) = (Instant::now(), cpu());
+        let pairs = self_intersections(&m);
+        let (t_check, c_check) = (start.elapsed(), cpu() - c0);
+        eprintln!(
+            "{label}: {} triangles, {} threads: detect {:.0} ms wall / {c_detect:.0} ms CPU, \
+             self_intersections {:.0} ms wall / {c_check:.0} ms CPU",
+            m.triangles.len(),
+            rayon::current_num_threads(),
+            t_detect.as_secs_f64() * 1e3,
+            t_check.as_secs_f64() * 1e3
+        );
+        assert!(contacts.is_empty() && pairs.is_empty());
+    }
+}

@@ -1,0 +1,335 @@
+//! The explicit front tracker (paper 000 Algorithm 1 without topology changes): each step
+//! integrates every vertex through the velocity field, makes the motion intersection-free by
+//! collision resolution (halving the step where that fails), then improves the mesh with
+//! collision-safe remeshing. φ and χ are read exactly off the mesh.
+
+use std::sync::OnceLock;
+use std::time::Instant;
+
+use glam::DVec3;
+use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField, OUTSIDE};
+use rayon::prelude::*;
+use thiserror::Error;
+
+use super::connectivity::Connectivity;
+use super::params::{FrontParams, Integrator};
+use super::remesh::{improve, RemeshStats};
+use super::response::{resolve, CollisionParams};
+use crate::contour::PhaseSampler;
+use crate::contour_tracker::ContourTracker;
+use crate::invariants::{check, InvariantError};
+use crate::mesh::LabeledMesh;
+use crate::query::MeshQuery;
+use crate::tracker::{InterfaceTracker, StepStats, TrackerError};
+
+/// Why a front tracker could not be built.
+#[derive(Debug, Error, PartialEq)]
+pub enum FrontError {
+    /// The starting mesh is not closed, label-consistent and non-degenerate.
+    #[error("the starting mesh is invalid: {0}")]
+    InvalidMesh(#[from] InvariantError),
+    /// The parameters contradict each other or are out of range.
+    #[error("invalid [tracker.front] parameters: {0}")]
+    InvalidParams(String),
+}
+
+/// What the last step did, beyond the timings of [`StepStats`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrontStepReport {
+    /// Remeshing operations.
+    pub remesh: RemeshStats,
+    /// Motion pieces integrated (1 when collision resolution succeeded at once).
+    pub substeps: usize,
+    /// Motion pieces dropped because collision resolution failed at the deepest halving.
+    pub dropped: usize,
+}
+
+/// The front tracker's state: the mesh with its connectivity and the remeshing bounds.
+pub struct FrontTracker {
+    c: Connectivity,
+    n_phases: usize,
+    background: PhaseId,
+    params: FrontParams,
+    /// Target edge length `L` in domain units.
+    target: f64,
+    collision: CollisionParams,
+    /// Box of the domain boundary faces (`OUTSIDE` labels), if the mesh has any.
+    domain: Option<(DVec3, DVec3)>,
+    query: OnceLock<MeshQuery>,
+    report: FrontStepReport,
+    /// Seconds spent this step integrating trajectories and resolving collisions.
+    seconds: [f64; 2],
+}
+
+impl FrontTracker {
+    /// Starts from `mesh` (closed, label-consistent). `background` is the phase reported
+    /// where the mesh has no interface. The target edge length is `params.edge_length`, or the
+    /// mean interface edge length of `mesh`. The mesh is remeshed before the first step.
+    pub fn new(
+        mesh: LabeledMesh,
+        n_phases: usize,
+        background: PhaseId,
+        params: FrontParams,
+    ) -> Result<FrontTracker, FrontError> {
+        check(&mesh, 0.0)?;
+        validate(&params)?;
+        let target = match params.edge_length {
+            Some(l) => l,
+            None => mean_interface_edge(&mesh).ok_or_else(|| {
+                FrontError::InvalidParams(
+                    "edge_length is needed for a mesh without interfaces".into(),
+                )
+            })?,
+        };
+        let domain = domain_box(&mesh);
+        let mut tracker = FrontTracker {
+            c: Connectivity::new(mesh),
+            n_phases,
+            background,
+            params,
+            target,
+            collision: CollisionParams::default(),
+            domain,
+            query: OnceLock::new(),
+            report: FrontStepReport::default(),
+            seconds: [0.0; 2],
+        };
+        // A contoured mesh is far from the target sizing: remesh until the bulk of the work is
+        // done, so that the first steps do not carry it (at most 4 passes).
+        for _ in 0..4 {
+            let stats = improve(&mut tracker.c, &tracker.params, tracker.target);
+            tracker.report.remesh = stats;
+            if stats.splits + stats.collapses < tracker.c.mesh.triangles.len() / 1000 {
+                break;
+            }
+        }
+        Ok(tracker)
+    }
+
+    /// Starts from the contouring of exact initial φ, χ on `grid` (the contouring tracker's
+    /// first mesh, closed at the domain boundary); without `params.edge_length` the target
+    /// edge length is the grid spacing.
+    pub fn from_sampler(
+        grid: GridSpec,
+        initial: &dyn PhaseSampler,
+        n_phases: usize,
+        background: PhaseId,
+        mut params: FrontParams,
+    ) -> Result<FrontTracker, FrontError> {
+        let (contour, _) = ContourTracker::new(grid, initial, n_phases, background);
+        params.edge_length = Some(params.edge_length.unwrap_or(grid.h));
+        FrontTracker::new(contour.mesh().clone(), n_phases, background, params)
+    }
+
+    /// Target edge length in domain units.
+    pub fn target_edge_length(&self) -> f64 {
+        self.target
+    }
+
+    /// Counts of the last step (or of the initial remeshing before the first step).
+    pub fn last_report(&self) -> FrontStepReport {
+        self.report
+    }
+
+    /// End positions of every vertex moving from `x0` at time `t` for `dt`.
+    fn integrate(
+        &self,
+        velocity: &dyn VelocityField,
+        x0: &[DVec3],
+        t: f64,
+        dt: f64,
+    ) -> Result<Vec<DVec3>, TrackerError> {
+        let integrator = self.params.integrator;
+        let x1: Vec<DVec3> = x0
+            .par_iter()
+            .map(|&x| match integrator {
+                Integrator::Rk2 => {
+                    let k1 = velocity.velocity(x, t);
+                    x + dt * velocity.velocity(x + 0.5 * dt * k1, t + 0.5 * dt)
+                }
+                Integrator::Rk4 => {
+                    let k1 = velocity.velocity(x, t);
+                    let k2 = velocity.velocity(x + 0.5 * dt * k1, t + 0.5 * dt);
+                    let k3 = velocity.velocity(x + 0.5 * dt * k2, t + 0.5 * dt);
+                    let k4 = velocity.velocity(x + dt * k3, t + dt);
+                    x + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+                }
+            })
+            .collect();
+        if let Some(i) = x1.iter().position(|p| !p.is_finite()) {
+            let x = x0[i];
+            return Err(TrackerError::NonFiniteVelocity {
+                x: x.x,
+                y: x.y,
+                z: x.z,
+                t,
+            });
+        }
+        Ok(self.constrain(x0, x1))
+    }
+
+    /// Keeps the domain boundary in place: vertices only on boundary faces stay, vertices
+    /// where an interface meets the boundary slide within the boundary planes they lie on.
+    fn constrain(&self, x0: &[DVec3], mut x1: Vec<DVec3>) -> Vec<DVec3> {
+        let Some((lo, hi)) = self.domain else {
+            return x1;
+        };
+        // Coordinates within a billionth of the box size of a box plane lie on it.
+        let tol = 1e-9 * (hi - lo).max_element();
+        for (v, p) in x1.iter_mut().enumerate() {
+            let tris = self.c.vertex_triangles(v as u32);
+            let on_boundary = tris.iter().any(|&t| self.c.labels(t).contains(&OUTSIDE));
+            if !on_boundary {
+                continue;
+            }
+            if tris.iter().all(|&t| self.c.labels(t).contains(&OUTSIDE)) {
+                *p = x0[v];
+                continue;
+            }
+            for k in 0..3 {
+                if (x0[v][k] - lo[k]).abs() <= tol || (x0[v][k] - hi[k]).abs() <= tol {
+                    p[k] = x0[v][k];
+                }
+            }
+            *p = p.clamp(lo, hi);
+        }
+        x1
+    }
+
+    /// Moves the mesh from `t` over `dt`, halving the motion where collision resolution
+    /// fails, down to `depth` halvings; the deepest unresolvable piece is dropped (the mesh
+    /// stays where it is for it, which is always intersection-free).
+    fn move_safely(
+        &mut self,
+        velocity: &dyn VelocityField,
+        t: f64,
+        dt: f64,
+        depth: u32,
+    ) -> Result<(), TrackerError> {
+        let start = Instant::now();
+        let x0 = self.c.mesh.vertices.clone();
+        let mut x1 = self.integrate(velocity, &x0, t, dt)?;
+        self.report.substeps += 1;
+        let integrated = Instant::now();
+        let resolved = resolve(&self.c.mesh.triangles, &x0, &mut x1, &self.collision).is_ok();
+        self.seconds[0] += (integrated - start).as_secs_f64();
+        self.seconds[1] += integrated.elapsed().as_secs_f64();
+        if resolved {
+            self.c.mesh.vertices = x1;
+            return Ok(());
+        }
+        if depth >= self.params.max_substep_depth {
+            self.report.dropped += 1;
+            return Ok(());
+        }
+        self.move_safely(velocity, t, 0.5 * dt, depth + 1)?;
+        self.move_safely(velocity, t + 0.5 * dt, 0.5 * dt, depth + 1)
+    }
+}
+
+/// Rejects contradictory or out-of-range parameters.
+fn validate(p: &FrontParams) -> Result<(), FrontError> {
+    let bad = |what: &str| Err(FrontError::InvalidParams(what.into()));
+    if let Some(l) = p.edge_length {
+        if !(l > 0.0 && l.is_finite()) {
+            return bad("edge_length must be positive");
+        }
+    }
+    if !(p.min_edge > 0.0 && p.min_edge * 2.0 < p.max_edge) {
+        return bad("need 0 < min_edge and 2 min_edge < max_edge (splits must not create edges to collapse)");
+    }
+    if !(0.0 <= p.min_angle && p.min_angle < 60.0 && 60.0 < p.max_angle && p.max_angle <= 180.0) {
+        return bad("need 0 <= min_angle < 60 < max_angle <= 180");
+    }
+    if !(p.min_area >= 0.0 && p.max_volume_change >= 0.0) {
+        return bad("min_area and max_volume_change must not be negative");
+    }
+    if !(0.0 < p.feature_angle && p.feature_angle < 180.0 && 0.0 <= p.poor_angle) {
+        return bad("need 0 < feature_angle < 180 and poor_angle >= 0");
+    }
+    Ok(())
+}
+
+/// Mean length of the edges of interface triangles (no `OUTSIDE` label).
+fn mean_interface_edge(mesh: &LabeledMesh) -> Option<f64> {
+    let (sum, n) = mesh
+        .triangles
+        .iter()
+        .zip(&mesh.labels)
+        .filter(|(_, l)| !l.contains(&OUTSIDE))
+        .flat_map(|(&[a, b, c], _)| [[a, b], [b, c], [c, a]])
+        .map(|[a, b]| (mesh.vertices[a as usize] - mesh.vertices[b as usize]).length())
+        .fold((0.0, 0usize), |(s, n), l| (s + l, n + 1));
+    (n > 0).then(|| sum / n as f64)
+}
+
+/// Bounding box of the vertices of the domain boundary faces.
+fn domain_box(mesh: &LabeledMesh) -> Option<(DVec3, DVec3)> {
+    mesh.triangles
+        .iter()
+        .zip(&mesh.labels)
+        .filter(|(_, l)| l.contains(&OUTSIDE))
+        .flat_map(|(t, _)| t.map(|v| mesh.vertices[v as usize]))
+        .fold(None, |acc, p| match acc {
+            None => Some((p, p)),
+            Some((lo, hi)) => Some((lo.min(p), hi.max(p))),
+        })
+}
+
+impl InterfaceTracker for FrontTracker {
+    fn advance(
+        &mut self,
+        velocity: &dyn VelocityField,
+        t: f64,
+        dt: f64,
+    ) -> Result<StepStats, TrackerError> {
+        self.report = FrontStepReport::default();
+        self.seconds = [0.0; 2];
+        self.move_safely(velocity, t, dt, 0)?;
+        let t1 = Instant::now();
+        self.report.remesh = improve(&mut self.c, &self.params, self.target);
+        let remesh = t1.elapsed().as_secs_f64();
+        self.query = OnceLock::new();
+        Ok(StepStats {
+            stages: vec![
+                ("advect", self.seconds[0]),
+                ("collide", self.seconds[1]),
+                ("remesh", remesh),
+            ],
+            cells: 0,
+            interface_cells: 0,
+        })
+    }
+
+    fn sample(&self, grid: &GridSpec) -> PhaseField {
+        let query = self
+            .query
+            .get_or_init(|| MeshQuery::new(&self.c.mesh, self.background));
+        let (phi, chi): (Vec<f64>, Vec<PhaseId>) = (0..grid.cell_count())
+            .into_par_iter()
+            .map(|c| {
+                let i = c % grid.dims[0];
+                let j = (c / grid.dims[0]) % grid.dims[1];
+                let k = c / (grid.dims[0] * grid.dims[1]);
+                let n = query.query(grid.cell_center(i, j, k));
+                (n.distance, n.phase)
+            })
+            .unzip();
+        PhaseField {
+            grid: *grid,
+            phi,
+            chi,
+        }
+    }
+
+    fn mesh(&self) -> &LabeledMesh {
+        &self.c.mesh
+    }
+
+    fn phase_volumes(&self) -> Vec<f64> {
+        self.c.mesh.phase_volumes(self.n_phases)
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,129 @@
+//! User bounds of the front tracker's remeshing and time integration (paper 000 Appendix A:
+//! "we expose the angle bounds, edge length bounds, minimum area bound, and volume change
+//! bound as user parameters"), readable from a scene's `[tracker.front]` table.
+
+use serde::Deserialize;
+
+/// Time integrator of the vertex trajectories (paper 000 §4.1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Integrator {
+    /// Midpoint rule, second order.
+    Rk2,
+    /// Classical Runge–Kutta, fourth order.
+    #[default]
+    Rk4,
+}
+
+/// Remeshing and integration parameters. Lengths are relative to the target edge length `L`
+/// ([`FrontParams::edge_length`], or the mean interface edge length of the initial mesh), so
+/// one set of defaults serves every resolution.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FrontParams {
+    /// Target edge length `L` in domain units; `None`: the mean interface edge length of the
+    /// mesh the tracker starts from.
+    pub edge_length: Option<f64>,
+    /// Edges shorter than `min_edge * L` are collapsed (default 0.5, Brochu & Bridson 2009).
+    pub min_edge: f64,
+    /// Edges longer than `max_edge * L` are split; no operation may create a longer edge
+    /// (default 1.5, Brochu & Bridson 2009).
+    pub max_edge: f64,
+    /// Smallest triangle angle (degrees) an operation may create unless it improves on the
+    /// worst angle it removes (default 3°).
+    pub min_angle: f64,
+    /// Largest triangle angle (degrees) an operation may create unless it improves on the
+    /// worst angle it removes (default 170°).
+    pub max_angle: f64,
+    /// Smallest triangle area an operation may create, relative to `L²` (default 1e-4).
+    pub min_area: f64,
+    /// Largest change of any phase volume one operation may cause, relative to `L³`
+    /// (default 0.02: a collapse on a smooth surface moves far less, a collapse across a
+    /// sharp feature more).
+    pub max_volume_change: f64,
+    /// Dihedral angle (degrees) above which a manifold edge is a feature edge (default 30°,
+    /// paper 000 Appendix A).
+    pub feature_angle: f64,
+    /// Angles (degrees) outside `[poor_angle, 180 - poor_angle]` trigger the fail-safe pass
+    /// of Appendix A.4 that ignores every bound except collision safety (default 2°).
+    pub poor_angle: f64,
+    /// Null-space smoothing passes per step (default 1; 0 disables smoothing).
+    pub smoothing_passes: u32,
+    /// Vertex trajectory integrator (default RK4).
+    pub integrator: Integrator,
+    /// Greatest number of times a step's motion is halved when collision resolution fails
+    /// before the unresolvable part of the motion is dropped (default 4).
+    pub max_substep_depth: u32,
+}
+
+impl Default for FrontParams {
+    fn default() -> Self {
+        FrontParams {
+            edge_length: None,
+            min_edge: 0.5,
+            max_edge: 1.5,
+            min_angle: 3.0,
+            max_angle: 170.0,
+            min_area: 1e-4,
+            max_volume_change: 0.02,
+            feature_angle: 30.0,
+            poor_angle: 2.0,
+            smoothing_passes: 1,
+            integrator: Integrator::Rk4,
+            max_substep_depth: 4,
+        }
+    }
+}
+
+/// The bounds in absolute units for a target edge length, as the remeshing operations use them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Bounds {
+    pub min_edge: f64,
+    pub max_edge: f64,
+    /// Cosine of the smallest allowed angle.
+    pub cos_min_angle: f64,
+    /// Cosine of the largest allowed angle.
+    pub cos_max_angle: f64,
+    pub min_area: f64,
+    pub max_volume_change: f64,
+    /// Cosine of the feature dihedral angle.
+    pub cos_feature: f64,
+    /// Cosine of the fail-safe poor angle.
+    pub cos_poor: f64,
+}
+
+impl Bounds {
+    /// Absolute bounds for target edge length `l`.
+    pub fn new(p: &FrontParams, l: f64) -> Bounds {
+        Bounds {
+            min_edge: p.min_edge * l,
+            max_edge: p.max_edge * l,
+            cos_min_angle: p.min_angle.to_radians().cos(),
+            cos_max_angle: p.max_angle.to_radians().cos(),
+            min_area: p.min_area * l * l,
+            max_volume_change: p.max_volume_change * l * l * l,
+            cos_feature: p.feature_angle.to_radians().cos(),
+            cos_poor: p.poor_angle.to_radians().cos(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn partial_tables_keep_the_other_defaults() {
+        let p: FrontParams = toml::from_str("min_edge = 0.4\nintegrator = \"rk2\"").expect("valid");
+        assert_eq!(p.min_edge, 0.4);
+        assert_eq!(p.integrator, Integrator::Rk2);
+        assert_eq!(p.max_edge, FrontParams::default().max_edge);
+        assert_eq!(p.edge_length, None);
+    }
+
+    #[test]
+    fn unknown_keys_are_refused() {
+        let err = toml::from_str::<FrontParams>("max_edges = 2.0").unwrap_err();
+        assert!(err.to_string().contains("max_edges"), "{err}");
+    }
+}

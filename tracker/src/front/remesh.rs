@@ -1,0 +1,326 @@
+//! Collision-safe remeshing of a labeled non-manifold mesh (paper 000 §7 and Appendix A):
+//! passes of edge splitting, edge collapsing, edge flipping and null-space smoothing, then the
+//! poor-triangle fail-safe of A.4. Every operation is atomic: it is evaluated against the user
+//! bounds (angles, areas, edge lengths, volume change) and checked as a pseudo-motion by
+//! continuous collision detection, and either completes in full or leaves the mesh untouched,
+//! so the mesh stays closed, label-consistent and intersection-free throughout.
+
+mod collapse;
+mod features;
+mod flip;
+mod safety;
+mod smooth;
+mod split;
+
+use glam::DVec3;
+use polyphase_grid::{PhaseId, OUTSIDE};
+
+use super::broadphase::TriangleGrid;
+
+use super::connectivity::Connectivity;
+#[cfg(test)]
+use super::connectivity::DEAD;
+use super::params::{Bounds, FrontParams};
+
+/// What one remeshing call did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RemeshStats {
+    /// Edges split.
+    pub splits: usize,
+    /// Edges collapsed.
+    pub collapses: usize,
+    /// Edges flipped.
+    pub flips: usize,
+    /// Vertices moved by smoothing.
+    pub smoothed: usize,
+    /// Operations cancelled because their pseudo-motion would collide.
+    pub unsafe_cancelled: usize,
+    /// Operations cancelled by a quality, length or volume bound.
+    pub bound_cancelled: usize,
+    /// Operations of the A.4 fail-safe pass that completed.
+    pub failsafe: usize,
+}
+
+/// Remeshes `c` in place toward edge length `target` and compacts it (indices change).
+pub fn improve(c: &mut Connectivity, params: &FrontParams, target: f64) -> RemeshStats {
+    let mut r = Remesher::new(c, Bounds::new(params, target));
+    r.split_pass();
+    r.collapse_pass();
+    r.flip_pass();
+    for _ in 0..params.smoothing_passes {
+        r.smooth_pass();
+    }
+    r.failsafe_pass();
+    let stats = r.stats;
+    c.compact();
+    stats
+}
+
+/// Triangle geometry gathered for evaluating an operation.
+#[derive(Clone, Copy, Debug)]
+struct Tri {
+    p: [DVec3; 3],
+    labels: [PhaseId; 2],
+}
+
+impl Tri {
+    fn area_normal(&self) -> DVec3 {
+        (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0])
+    }
+
+    fn area(&self) -> f64 {
+        0.5 * self.area_normal().length()
+    }
+
+    /// Cosines of the smallest and of the largest angle (0 and 1 for a degenerate triangle).
+    fn angle_cosines(&self) -> (f64, f64) {
+        let mut small = -1.0f64;
+        let mut large = 1.0f64;
+        for k in 0..3 {
+            let u = (self.p[(k + 1) % 3] - self.p[k]).normalize_or_zero();
+            let v = (self.p[(k + 2) % 3] - self.p[k]).normalize_or_zero();
+            if u == DVec3::ZERO || v == DVec3::ZERO {
+                return (1.0, -1.0);
+            }
+            let cos = u.dot(v);
+            small = small.max(cos);
+            large = large.min(cos);
+        }
+        (small, large)
+    }
+}
+
+/// The state of one remeshing call: the mesh, the bounds, the broad phase over the live
+/// triangles and a scratch copy of the positions that holds each pseudo-motion's end state.
+pub(crate) struct Remesher<'a> {
+    c: &'a mut Connectivity,
+    b: Bounds,
+    grid: TriangleGrid,
+    /// Pseudo-motion end positions; equal to the mesh's positions between operations.
+    x1: Vec<DVec3>,
+    /// In the fail-safe pass only collision safety, inversion and non-degeneracy are checked.
+    failsafe: bool,
+    stats: RemeshStats,
+    /// Runs the invariant checks after every operation (tests).
+    #[cfg(test)]
+    verify: bool,
+    /// Phase volumes after the last verified operation (tests).
+    #[cfg(test)]
+    volumes: Vec<f64>,
+}
+
+impl<'a> Remesher<'a> {
+    pub(crate) fn new(c: &'a mut Connectivity, b: Bounds) -> Remesher<'a> {
+        let mut grid = TriangleGrid::new(b.max_edge);
+        for t in 0..c.mesh.triangles.len() as u32 {
+            if c.is_live(t) {
+                let (lo, hi) = tri_box(c, t);
+                grid.insert(t, lo, hi);
+            }
+        }
+        let x1 = c.mesh.vertices.clone();
+        Remesher {
+            c,
+            b,
+            grid,
+            x1,
+            failsafe: false,
+            stats: RemeshStats::default(),
+            #[cfg(test)]
+            verify: false,
+            #[cfg(test)]
+            volumes: Vec::new(),
+        }
+    }
+
+    fn tri(&self, t: u32) -> Tri {
+        let [a, b, c] = self.c.triangle(t);
+        Tri {
+            p: [self.c.position(a), self.c.position(b), self.c.position(c)],
+            labels: self.c.labels(t),
+        }
+    }
+
+    fn add_vertex(&mut self, p: DVec3) -> u32 {
+        self.x1.push(p);
+        self.c.add_vertex(p)
+    }
+
+    fn add_triangle(&mut self, tri: [u32; 3], labels: [PhaseId; 2]) -> u32 {
+        let t = self.c.add_triangle(tri, labels);
+        let (lo, hi) = tri_box(self.c, t);
+        self.grid.insert(t, lo, hi);
+        t
+    }
+
+    fn remove_triangle(&mut self, t: u32) {
+        self.grid.remove(t);
+        self.c.remove_triangle(t);
+    }
+
+    /// Moves vertex `v` to `p` and refreshes the broad-phase boxes of its triangles.
+    fn move_vertex(&mut self, v: u32, p: DVec3) {
+        self.c.mesh.vertices[v as usize] = p;
+        self.x1[v as usize] = p;
+        for i in 0..self.c.vertex_triangles(v).len() {
+            let t = self.c.vertex_triangles(v)[i];
+            self.grid.remove(t);
+            let (lo, hi) = tri_box(self.c, t);
+            self.grid.insert(t, lo, hi);
+        }
+    }
+
+    /// The quality bounds of Appendix A for replacing triangles `old` by `new`: no new angle
+    /// outside `[min_angle, max_angle]` unless the worst angle improves, no area below the
+    /// minimum, no phase volume changing by more than the bound. In the fail-safe pass only
+    /// non-degeneracy is required. Counts a cancellation when the bounds fail.
+    fn bounds_allow(&mut self, old: &[Tri], new: &[Tri]) -> bool {
+        self.bounds_allow_volume(old, new, self.b.max_volume_change)
+    }
+
+    /// [`Self::bounds_allow`] with volume bound `max_volume_change`.
+    fn bounds_allow_volume(&mut self, old: &[Tri], new: &[Tri], max_volume_change: f64) -> bool {
+        let ok = if new.iter().any(|t| t.area().is_nan() || t.area() <= 0.0) {
+            false
+        } else if self.failsafe {
+            true
+        } else {
+            let worst = |ts: &[Tri]| {
+                ts.iter().fold((-1.0f64, 1.0f64), |(s, l), t| {
+                    let (ts, tl) = t.angle_cosines();
+                    (s.max(ts), l.min(tl))
+                })
+            };
+            let (old_small, old_large) = worst(old);
+            let (new_small, new_large) = worst(new);
+            (new_small <= self.b.cos_min_angle || new_small < old_small)
+                && (new_large >= self.b.cos_max_angle || new_large > old_large)
+                && new.iter().all(|t| t.area() > self.b.min_area)
+                && volume_change(old, new) <= max_volume_change
+        };
+        if !ok {
+            self.stats.bound_cancelled += 1;
+        }
+        ok
+    }
+
+    /// Is live triangle `t` very poor (an angle outside `[poor, 180° - poor]`)?
+    fn is_poor(&self, t: u32) -> bool {
+        let (small, large) = self.tri(t).angle_cosines();
+        small > self.b.cos_poor || large < -self.b.cos_poor
+    }
+
+    /// Appendix A.4: triangles still very poor after the regular passes get a collapse of
+    /// their shortest edge, else a flip of their longest, with only collision safety,
+    /// inversion and non-degeneracy checked.
+    fn failsafe_pass(&mut self) {
+        let poor: Vec<u32> = (0..self.c.mesh.triangles.len() as u32)
+            .filter(|&t| self.c.is_live(t) && self.is_poor(t))
+            .collect();
+        self.failsafe = true;
+        for t in poor {
+            if !self.c.is_live(t) || !self.is_poor(t) {
+                continue;
+            }
+            let [a, b, c] = self.c.triangle(t);
+            let mut edges = [[a, b], [b, c], [c, a]];
+            edges.sort_by(|x, y| {
+                let l = |e: &[u32; 2]| (self.c.position(e[0]) - self.c.position(e[1])).length();
+                l(x).total_cmp(&l(y))
+            });
+            let [s0, s1] = edges[0];
+            let [l0, l1] = edges[2];
+            if self.try_collapse(s0, s1) || self.try_flip(l0, l1, true) {
+                self.stats.failsafe += 1;
+                self.verify_now("fail-safe");
+            }
+        }
+        self.failsafe = false;
+    }
+
+    /// After an operation in tests: the live mesh passes the shared invariant checks, and no
+    /// phase volume moved by more than the bound (outside the fail-safe pass).
+    #[cfg(test)]
+    fn verify_now(&mut self, what: &str) {
+        if !self.verify {
+            return;
+        }
+        let mesh = self.live_mesh();
+        if let Err(e) = crate::invariants::check(&mesh, 0.0) {
+            panic!("after {what}: {e}");
+        }
+        let volumes = mesh.phase_volumes(tests::PHASES);
+        if !self.failsafe {
+            for (v, w) in volumes.iter().zip(&self.volumes) {
+                // The bound, plus rounding of the global tetra sums.
+                assert!(
+                    (v - w).abs() <= self.b.max_volume_change + 1e-12,
+                    "{what} changed a volume by {}",
+                    v - w
+                );
+            }
+        }
+        self.volumes = volumes;
+    }
+
+    #[cfg(not(test))]
+    fn verify_now(&mut self, _what: &str) {}
+
+    /// The live triangles as a plain mesh (unused vertices kept).
+    #[cfg(test)]
+    fn live_mesh(&self) -> crate::mesh::LabeledMesh {
+        let mut mesh = self.c.mesh.clone();
+        let keep: Vec<bool> = mesh.triangles.iter().map(|t| *t != DEAD).collect();
+        let mut k = keep.iter();
+        mesh.labels.retain(|_| *k.next().unwrap_or(&false));
+        mesh.triangles.retain(|t| *t != DEAD);
+        mesh
+    }
+}
+
+/// Bounding box of live triangle `t`.
+fn tri_box(c: &Connectivity, t: u32) -> (DVec3, DVec3) {
+    let [a, b, d] = c.triangle(t).map(|v| c.position(v));
+    (a.min(b).min(d), a.max(b).max(d))
+}
+
+/// Largest change of any phase's volume when the triangles `old` are replaced by `new` (both
+/// bounding the same hole of the rest of the mesh): the divergence-theorem tetra sums of
+/// [`crate::mesh::LabeledMesh::phase_volumes`] about a common local reference point, whose
+/// choice cancels because the two patches share their boundary.
+fn volume_change(old: &[Tri], new: &[Tri]) -> f64 {
+    let Some(first) = old.first() else {
+        return 0.0;
+    };
+    let r = first.p[0];
+    let mut change: Vec<(PhaseId, f64)> = Vec::new();
+    let mut add = |phase: PhaseId, v: f64| {
+        if phase == OUTSIDE {
+            return;
+        }
+        match change.iter_mut().find(|(p, _)| *p == phase) {
+            Some((_, x)) => *x += v,
+            None => change.push((phase, v)),
+        }
+    };
+    for (tris, sign) in [(old, -1.0), (new, 1.0)] {
+        for t in tris {
+            let [a, b, c] = t.p.map(|p| p - r);
+            let v = sign * a.dot(b.cross(c)) / 6.0;
+            add(t.labels[1], v);
+            add(t.labels[0], -v);
+        }
+    }
+    change.iter().map(|(_, v)| v.abs()).fold(0.0, f64::max)
+}
+
+/// Triangle `tri` rotated so that it starts with the directed edge `(a, b)`, or `None` when it
+/// traverses the edge from `b` to `a` (or does not contain it).
+fn starting_with(tri: [u32; 3], a: u32, b: u32) -> Option<[u32; 3]> {
+    (0..3)
+        .map(|k| [tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]])
+        .find(|r| r[0] == a && r[1] == b)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,197 @@
+//! Edge collapsing (paper 000 Appendix A.2): the triangles on the edge vanish, one endpoint is
+//! removed and its triangles are re-attached to the other, with no relabeling. The position
+//! kept follows the feature priority (peak > ridge > smooth, then non-manifold > manifold);
+//! equal vertices meet at the midpoint. Checked as the pseudo-motion of both endpoints to
+//! the final position with the vanishing triangles left out.
+
+use glam::DVec3;
+
+use super::features::Kind;
+use super::{Remesher, Tri};
+use crate::front::connectivity::DEAD;
+
+impl Remesher<'_> {
+    /// Collapses edges shorter than the minimum length, shortest first, repeating while that
+    /// makes progress (at most 4 rounds).
+    pub(super) fn collapse_pass(&mut self) {
+        for _ in 0..4 {
+            if self.collapse_round() == 0 {
+                break;
+            }
+        }
+    }
+
+    /// One round over the edges too short at its start; returns the number of collapses.
+    fn collapse_round(&mut self) -> usize {
+        let mut done = 0;
+        let mut short: Vec<(f64, [u32; 2])> = self
+            .c
+            .edges()
+            .into_iter()
+            .map(|[a, b]| ((self.c.position(a) - self.c.position(b)).length(), [a, b]))
+            .filter(|(l, _)| *l < self.b.min_edge)
+            .collect();
+        short.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        for (_, [a, b]) in short {
+            let l = (self.c.position(a) - self.c.position(b)).length();
+            if l < self.b.min_edge && self.try_collapse(a, b) {
+                self.stats.collapses += 1;
+                done += 1;
+                self.verify_now("collapse");
+            }
+        }
+        done
+    }
+
+    /// Where edge `(a, b)` collapses to: `(kept vertex, removed vertex, position)`, or `None`
+    /// when the collapse would merge two different features (both endpoints on features or
+    /// non-manifold curves, joined by an ordinary edge). The fail-safe pass allows it.
+    pub(super) fn collapse_target(&self, a: u32, b: u32) -> Option<(u32, u32, DVec3)> {
+        let (va, vb) = (self.vertex_features(a), self.vertex_features(b));
+        let (pa, pb) = (self.c.position(a), self.c.position(b));
+        match va.rank().cmp(&vb.rank()) {
+            std::cmp::Ordering::Greater => Some((a, b, pa)),
+            std::cmp::Ordering::Less => Some((b, a, pb)),
+            std::cmp::Ordering::Equal => {
+                let joined = va.feature_neighbours.contains(&b);
+                let separate_features = (va.kind != Kind::Smooth || va.non_manifold) && !joined;
+                if separate_features && !self.failsafe {
+                    None
+                } else if va.kind == Kind::Peak && !self.failsafe {
+                    // Two corners: either position destroys one of them.
+                    None
+                } else {
+                    Some((a, b, 0.5 * (pa + pb)))
+                }
+            }
+        }
+    }
+
+    /// Collapses edge `(a, b)` if it is topologically valid, within bounds and collision-safe.
+    pub(super) fn try_collapse(&mut self, a: u32, b: u32) -> bool {
+        let mut edge_tris = Vec::new();
+        self.c.edge_triangles(a, b, &mut edge_tris);
+        if edge_tris.is_empty() {
+            return false;
+        }
+        let Some((keep, gone, p)) = self.collapse_target(a, b) else {
+            self.stats.bound_cancelled += 1;
+            return false;
+        };
+        // Link condition: the only vertices adjacent to both ends are the apexes of the
+        // triangles on the edge.
+        let apexes: Vec<u32> = {
+            let mut v: Vec<u32> = edge_tris
+                .iter()
+                .flat_map(|&t| self.c.triangle(t))
+                .filter(|&v| v != a && v != b)
+                .collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        let nk = self.c.neighbours(keep);
+        let ng = self.c.neighbours(gone);
+        if nk
+            .iter()
+            .any(|v| *v != gone && ng.binary_search(v).is_ok() && apexes.binary_search(v).is_err())
+        {
+            return false;
+        }
+        // Surviving triangles with `gone` renamed `keep`; none may duplicate another.
+        let moved: Vec<u32> = self
+            .c
+            .vertex_triangles(gone)
+            .iter()
+            .copied()
+            .filter(|t| !edge_tris.contains(t))
+            .collect();
+        let renamed: Vec<[u32; 3]> = moved
+            .iter()
+            .map(|&t| self.c.triangle(t).map(|v| if v == gone { keep } else { v }))
+            .collect();
+        let mut keys: Vec<[u32; 3]> = self
+            .c
+            .vertex_triangles(keep)
+            .iter()
+            .filter(|t| !edge_tris.contains(t))
+            .map(|&t| self.c.triangle(t))
+            .chain(renamed.iter().copied())
+            .map(|mut t| {
+                t.sort_unstable();
+                t
+            })
+            .collect();
+        keys.sort_unstable();
+        if keys.windows(2).any(|w| w[0] == w[1]) {
+            return false;
+        }
+        // Geometry before and after: every triangle around either end.
+        let kept_tris: Vec<u32> = self
+            .c
+            .vertex_triangles(keep)
+            .iter()
+            .copied()
+            .filter(|t| !edge_tris.contains(t))
+            .collect();
+        let mut old: Vec<Tri> = edge_tris.iter().map(|&t| self.tri(t)).collect();
+        let mut new = Vec::new();
+        for (&t, tri) in kept_tris
+            .iter()
+            .zip(kept_tris.iter().map(|&t| self.c.triangle(t)))
+            .chain(moved.iter().zip(renamed.iter().copied()))
+        {
+            let before = self.tri(t);
+            let after = Tri {
+                p: tri.map(|v| if v == keep { p } else { self.c.position(v) }),
+                labels: before.labels,
+            };
+            // No triangle may turn over.
+            if before.area_normal().dot(after.area_normal()) <= 0.0 {
+                self.stats.bound_cancelled += 1;
+                return false;
+            }
+            old.push(before);
+            new.push(after);
+        }
+        if !self.failsafe {
+            let too_long = nk
+                .iter()
+                .chain(&ng)
+                .filter(|&&v| v != keep && v != gone)
+                .any(|&v| (self.c.position(v) - p).length() > self.b.max_edge);
+            if too_long {
+                self.stats.bound_cancelled += 1;
+                return false;
+            }
+        }
+        if !self.bounds_allow(&old, &new) {
+            return false;
+        }
+        // Pseudo-motion with the vanishing triangles hidden from the check.
+        let hidden: Vec<[u32; 3]> = edge_tris.iter().map(|&t| self.c.triangle(t)).collect();
+        for &t in &edge_tris {
+            self.grid.remove(t);
+            self.c.mesh.triangles[t as usize] = DEAD;
+        }
+        let safe = self.pseudo_motion_is_safe(&[keep, gone], &[p, p], Some([keep, gone]));
+        for (&t, &tri) in edge_tris.iter().zip(&hidden) {
+            self.c.mesh.triangles[t as usize] = tri;
+            let (lo, hi) = super::tri_box(self.c, t);
+            self.grid.insert(t, lo, hi);
+        }
+        if !safe {
+            return false;
+        }
+        for &t in &edge_tris {
+            self.remove_triangle(t);
+        }
+        for (&t, tri) in moved.iter().zip(renamed) {
+            let labels = self.c.labels(t);
+            self.remove_triangle(t);
+            self.add_triangle(tri, labels);
+        }
+        self.move_vertex(keep, p);
+        true
+    }
+}

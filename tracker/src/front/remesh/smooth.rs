@@ -1,0 +1,127 @@
+//! Null-space (tangential) vertex smoothing (paper 000 Appendix A.3) of vertices next to a
+//! poorly shaped triangle: a smooth vertex moves
+//! toward the area-weighted centroid of its triangles with the normal component of that
+//! displacement removed (the area-weighted normal is the gradient of the volume enclosed by the
+//! vertex's fan, so the fan's volume does not change); a ridge vertex (two feature edges,
+//! non-manifold curves included) moves only along the ridge, toward the midpoint of its two
+//! ridge neighbours; peaks, ends of ridges and other non-manifold vertices stay. Each
+//! displacement is checked as a pseudo-motion.
+
+use glam::DVec3;
+
+use super::features::Kind;
+use super::{Remesher, Tri};
+
+impl Remesher<'_> {
+    /// Smooths every vertex once, in index order (Gauss–Seidel, deterministic).
+    pub(super) fn smooth_pass(&mut self) {
+        for v in 0..self.c.mesh.vertices.len() as u32 {
+            if !self.c.vertex_triangles(v).is_empty() && self.try_smooth(v) {
+                self.stats.smoothed += 1;
+                self.verify_now("smooth");
+            }
+        }
+    }
+
+    /// Does `v` touch a triangle with an angle below 25° or above 120°? Only such vertices
+    /// are smoothed: smoothing a fine neighbourhood gains nothing, and on a curved ridge or
+    /// triple curve every move costs a little volume.
+    fn needs_smoothing(&self, v: u32) -> bool {
+        // cos 25°, cos 120°.
+        let (cos_small, cos_large) = (0.906_307_787, -0.5);
+        self.c.vertex_triangles(v).iter().any(|&t| {
+            let (small, large) = self.tri(t).angle_cosines();
+            small > cos_small || large < cos_large
+        })
+    }
+
+    /// The smoothed position of `v`, or `None` when `v` must stay.
+    fn smoothed_position(&self, v: u32) -> Option<DVec3> {
+        if !self.needs_smoothing(v) {
+            return None;
+        }
+        let x = self.c.position(v);
+        let f = self.vertex_features(v);
+        match (f.kind, f.non_manifold, &f.feature_neighbours[..]) {
+            (Kind::Smooth, false, _) => {
+                let tris = self.c.vertex_triangles(v);
+                let reference = self.c.labels(tris[0]);
+                let (mut weighted, mut area, mut normal) = (DVec3::ZERO, 0.0, DVec3::ZERO);
+                for &t in tris {
+                    let tri = self.tri(t);
+                    let an = tri.area_normal();
+                    let a = 0.5 * an.length();
+                    weighted += a * (tri.p[0] + tri.p[1] + tri.p[2]) / 3.0;
+                    area += a;
+                    // Orient every normal toward the reference triangle's front phase.
+                    normal += if tri.labels[0] == reference[0] {
+                        an
+                    } else {
+                        -an
+                    };
+                }
+                let n = normal.normalize_or_zero();
+                if area <= 0.0 || n == DVec3::ZERO {
+                    return None;
+                }
+                let d = weighted / area - x;
+                Some(x + d - d.dot(n) * n)
+            }
+            (Kind::Ridge, _, &[u1, u2]) => {
+                let (p1, p2) = (self.c.position(u1), self.c.position(u2));
+                let dir = ((p1 - x).normalize_or_zero() - (p2 - x).normalize_or_zero())
+                    .normalize_or_zero();
+                let d = 0.5 * (p1 + p2) - x;
+                Some(x + d.dot(dir) * dir)
+            }
+            _ => None,
+        }
+    }
+
+    /// Moves `v` to its smoothed position if the bounds allow and the motion is safe.
+    pub(super) fn try_smooth(&mut self, v: u32) -> bool {
+        let Some(p) = self.smoothed_position(v) else {
+            return false;
+        };
+        let x = self.c.position(v);
+        // Displacements below a millionth of the collapse length change nothing useful.
+        if (p - x).length() < 1e-6 * self.b.min_edge {
+            return false;
+        }
+        // No edge may grow past the split length.
+        let too_long = self.c.neighbours(v).iter().any(|&u| {
+            let q = self.c.position(u);
+            (p - q).length() > self.b.max_edge.max((x - q).length())
+        });
+        if too_long {
+            self.stats.bound_cancelled += 1;
+            return false;
+        }
+        let tris: Vec<u32> = self.c.vertex_triangles(v).to_vec();
+        let old: Vec<Tri> = tris.iter().map(|&t| self.tri(t)).collect();
+        let new: Vec<Tri> = tris
+            .iter()
+            .zip(&old)
+            .map(|(&t, o)| Tri {
+                p: self
+                    .c
+                    .triangle(t)
+                    .map(|u| if u == v { p } else { self.c.position(u) }),
+                labels: o.labels,
+            })
+            .collect();
+        if old
+            .iter()
+            .zip(&new)
+            .any(|(o, n)| o.area_normal().dot(n.area_normal()) <= 0.0)
+        {
+            self.stats.bound_cancelled += 1;
+            return false;
+        }
+        if !self.bounds_allow(&old, &new) || !self.pseudo_motion_is_safe(&[v], &[p], None) {
+            return false;
+        }
+        self.move_vertex(v, p);
+        true
+    }
+}

@@ -1,0 +1,163 @@
+//! Response tests: colliding spheres end intersection-free, identical on 1 and 2 threads.
+
+use super::*;
+use crate::front::collision::detect;
+use crate::front::intersection::self_intersections;
+use crate::front::predicates::tests::Rng;
+use crate::mesh::fixtures::icosphere;
+use crate::LabeledMesh;
+
+fn two_spheres(gap: f64, level: u32) -> LabeledMesh {
+    let mut m = icosphere(DVec3::new(-0.25 - gap / 2.0, 0.0, 0.0), 0.25, level, 1, 0);
+    m.append(&icosphere(
+        DVec3::new(0.25 + gap / 2.0, 0.0, 0.0),
+        0.25,
+        level,
+        2,
+        0,
+    ));
+    m
+}
+
+/// Left sphere moves by `+d` in x, the right one by `-d`, plus jitter of size `jitter`.
+fn driven(m: &LabeledMesh, d: f64, jitter: f64, seed: u64) -> Vec<DVec3> {
+    let mut rng = Rng(seed);
+    m.vertices
+        .iter()
+        .map(|&p| p + DVec3::new(if p.x < 0.0 { d } else { -d }, 0.0, 0.0) + jitter * rng.v())
+        .collect()
+}
+
+fn assert_clean(m: &LabeledMesh, x0: &[DVec3], x1: &[DVec3]) {
+    assert!(detect(&m.triangles, x0, x1).is_empty());
+    let end = LabeledMesh {
+        vertices: x1.to_vec(),
+        ..m.clone()
+    };
+    assert!(self_intersections(&end).is_empty());
+}
+
+#[test]
+fn spheres_driven_into_each_other_end_intersection_free() {
+    let mut m = two_spheres(0.02, 2);
+    // A removed slot (connectivity::DEAD) must be ignored by resolve and the checker.
+    m.triangles.push(crate::front::connectivity::DEAD);
+    m.labels.push([0, 0]);
+    let x0 = m.vertices.clone();
+    // Head-on, 0.1 each: the spheres would overlap by 0.18 of their 0.5 diameters.
+    let mut x1 = driven(&m, 0.1, 0.0, 1);
+    assert!(!self_intersections(&LabeledMesh {
+        vertices: x1.clone(),
+        ..m.clone()
+    })
+    .is_empty());
+    let stats = resolve(&m.triangles, &x0, &mut x1, &CollisionParams::default()).expect("resolved");
+    assert!(stats.contacts > 0);
+    assert_clean(&m, &x0, &x1);
+    // With jitter (sliding, tangential motion) and a larger thickness.
+    let params = CollisionParams {
+        thickness: 0.005,
+        ..CollisionParams::default()
+    };
+    let mut x1 = driven(&m, 0.1, 0.01, 2);
+    resolve(&m.triangles, &x0, &mut x1, &params).expect("resolved");
+    assert_clean(&m, &x0, &x1);
+}
+
+#[test]
+fn tunnelling_motion_is_stopped() {
+    // The left sphere jumps right past the right one: the end state alone would be clean.
+    let m = two_spheres(0.02, 1);
+    let x0 = m.vertices.clone();
+    let mut x1: Vec<DVec3> = x0
+        .iter()
+        .map(|&p| {
+            if p.x < 0.0 {
+                p + DVec3::new(1.2, 0.0, 0.0)
+            } else {
+                p
+            }
+        })
+        .collect();
+    assert!(self_intersections(&LabeledMesh {
+        vertices: x1.clone(),
+        ..m.clone()
+    })
+    .is_empty());
+    assert!(!detect(&m.triangles, &x0, &x1).is_empty());
+    resolve(&m.triangles, &x0, &mut x1, &CollisionParams::default()).expect("resolved");
+    assert_clean(&m, &x0, &x1);
+}
+
+#[test]
+fn free_motion_is_untouched_and_bad_input_is_rejected() {
+    let m = two_spheres(0.1, 2);
+    let x0 = m.vertices.clone();
+    let mut x1 = driven(&m, -0.01, 0.001, 3);
+    let before = x1.clone();
+    let stats = resolve(&m.triangles, &x0, &mut x1, &CollisionParams::default()).expect("free");
+    assert_eq!(x1, before);
+    assert_eq!(stats.contacts, 0);
+    x1[5].y = f64::NAN;
+    let err = resolve(&m.triangles, &x0, &mut x1, &CollisionParams::default()).unwrap_err();
+    assert_eq!(err.cause, UnresolvedCause::NonFinite { vertex: 5 });
+}
+
+#[test]
+fn resolution_is_identical_on_one_and_two_threads() {
+    let m = two_spheres(0.02, 2);
+    let x0 = m.vertices.clone();
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool")
+            .install(|| {
+                let mut x1 = driven(&m, 0.1, 0.01, 4);
+                let stats = resolve(&m.triangles, &x0, &mut x1, &CollisionParams::default());
+                (x1, stats)
+            })
+    };
+    let (a, sa) = run(1);
+    let (b, sb) = run(2);
+    assert!(sa.is_ok());
+    assert_eq!(sa, sb);
+    assert!(a
+        .iter()
+        .zip(&b)
+        .all(|(p, q)| p.to_array().map(f64::to_bits) == q.to_array().map(f64::to_bits)));
+}
+
+#[test]
+fn proximity_repulsion_stops_approach_inside_the_thickness() {
+    // Gap 0.002 inside the thickness 0.005; each sphere moves 0.0005 toward the other, which
+    // would close the gap to 0.001 without any contact. Repulsion forbids approach for pairs
+    // already closer than h / 2, so the closest vertex–triangle distance across the gap stays
+    // near 0.002 (Gauss–Seidel over pairs sharing vertices leaves a small residual).
+    let m = two_spheres(0.002, 2);
+    let x0 = m.vertices.clone();
+    let mut x1 = driven(&m, 0.0005, 0.0, 5);
+    let params = CollisionParams {
+        thickness: 0.005,
+        ..CollisionParams::default()
+    };
+    let stats = resolve(&m.triangles, &x0, &mut x1, &params).expect("resolved");
+    assert!(stats.proximity_pairs > 0);
+    let half = m.triangles.len() / 2;
+    let gap = |x: &[DVec3]| {
+        let left = m.triangles[..half].iter().flatten().copied();
+        left.map(|v| {
+            m.triangles[half..]
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| x[i as usize]);
+                    proximity::point_triangle_distance(x[v as usize], a, b, c)
+                })
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(f64::INFINITY, f64::min)
+    };
+    let (before, after) = (gap(&x0), gap(&x1));
+    assert!((before - 0.002).abs() < 1e-9, "{before}");
+    assert!(after > 0.0018, "{after}");
+}
