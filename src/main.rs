@@ -44,6 +44,11 @@ enum Command {
         /// Worker threads (default: all cores). Output is identical for any value.
         #[arg(long)]
         threads: Option<usize>,
+        /// Then render every frame (a quick preview: 320×240, 16 samples per pixel) with
+        /// `polyphase render`, plus the plots and the movie; render again with
+        /// `polyphase render DIR` for other settings.
+        #[arg(long)]
+        render: bool,
     },
     /// Continue a killed run from its last checkpoint; the frames come out byte-identical to
     /// an uninterrupted run's.
@@ -74,6 +79,7 @@ fn main() -> ExitCode {
             resolution,
             frames,
             threads,
+            render,
         } => with_threads(threads, || {
             run::run(&run::RunOptions {
                 scene,
@@ -81,6 +87,10 @@ fn main() -> ExitCode {
                 resolution,
                 frames,
             })
+        })
+        .and_then(|root| match render {
+            true => render::render(&render::RenderArgs::preview(root)),
+            false => Ok(()),
         }),
         Command::Resume { dir, threads } => with_threads(threads, || run::resume(&dir)),
         Command::Render(args) => render::render(&args),
@@ -101,10 +111,10 @@ fn main() -> ExitCode {
 }
 
 /// Runs `f` on a rayon pool of `threads` workers (all cores when `None`).
-fn with_threads(
+fn with_threads<T: Send>(
     threads: Option<usize>,
-    f: impl FnOnce() -> anyhow::Result<()> + Send,
-) -> anyhow::Result<()> {
+    f: impl FnOnce() -> anyhow::Result<T> + Send,
+) -> anyhow::Result<T> {
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
         anyhow::ensure!(n >= 1, "--threads must be at least 1");

@@ -55,6 +55,28 @@ pub struct RenderArgs {
     pub python: Option<PathBuf>,
 }
 
+impl RenderArgs {
+    /// Quick preview settings for `polyphase run --render`: every frame at 320×240 with 16
+    /// samples per pixel, plots and movie, the scene's own tank setting.
+    pub fn preview(dir: PathBuf) -> RenderArgs {
+        RenderArgs {
+            dir,
+            frames: "all".into(),
+            width: 320,
+            height: 240,
+            spp: 16,
+            variant: "auto".into(),
+            no_movie: false,
+            no_plots: false,
+            vol: None,
+            volume: false,
+            tank: false,
+            no_tank: false,
+            python: None,
+        }
+    }
+}
+
 /// Exit status of the pipeline when some frames were bad or missing (the rest rendered).
 const SOME_FRAMES_BAD: i32 = 1;
 

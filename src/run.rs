@@ -26,9 +26,9 @@ pub struct RunOptions {
     pub frames: Option<i64>,
 }
 
-/// Runs a scene to its end time. Everything about the input is checked before the output
-/// folder is touched, so a bad scene leaves no frames behind.
-pub fn run(opts: &RunOptions) -> Result<()> {
+/// Runs a scene to its end time and returns its output folder. Everything about the input is
+/// checked before the output folder is touched, so a bad scene leaves no frames behind.
+pub fn run(opts: &RunOptions) -> Result<PathBuf> {
     let scene = polyphase_scenes::load(&opts.scene)?;
     let scene = if opts.resolution.is_some() || opts.frames.is_some() {
         scene.with_overrides(opts.resolution, opts.frames)?
@@ -49,9 +49,11 @@ pub fn run(opts: &RunOptions) -> Result<()> {
     folder.write("scene.toml", toml.as_bytes())?;
     let start = Start::Fresh(scene_hash(toml.as_bytes()));
     if scene.is_coupled() {
-        return crate::run_coupled::run_coupled(&scene, &folder, &root, start);
+        crate::run_coupled::run_coupled(&scene, &folder, &root, start)?;
+    } else {
+        run_passive(&scene, &folder, &root, start)?;
     }
-    run_passive(&scene, &folder, &root, start)
+    Ok(root)
 }
 
 /// `polyphase resume DIR`: continues a killed run from its last checkpoint with the resolved
