@@ -7,6 +7,7 @@
 pub mod vdb;
 
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Index of a phase in the scene's phase list.
@@ -63,6 +64,26 @@ pub struct PhaseField {
     pub grid: GridSpec,
     pub phi: Vec<f64>,
     pub chi: Vec<PhaseId>,
+}
+
+impl PhaseField {
+    /// φ, χ at every cell centre of `grid` from `f`, computed in parallel, stored in cell order
+    /// (x fastest); each value depends only on its own cell, so any thread count gives the same.
+    pub fn from_cell_centres(
+        grid: &GridSpec,
+        f: impl Fn(DVec3) -> (f64, PhaseId) + Sync,
+    ) -> PhaseField {
+        let [nx, ny, _] = grid.dims;
+        let (phi, chi) = (0..grid.cell_count())
+            .into_par_iter()
+            .map(|c| f(grid.cell_center(c % nx, (c / nx) % ny, c / (nx * ny))))
+            .unzip();
+        PhaseField {
+            grid: *grid,
+            phi,
+            chi,
+        }
+    }
 }
 
 /// Anything that gives a velocity (m/s) at a point and time: analytic test flows, or the

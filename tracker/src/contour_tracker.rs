@@ -7,7 +7,6 @@ use std::time::Instant;
 
 use glam::DVec3;
 use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField};
-use rayon::prelude::*;
 
 use crate::contour::{MdTree, PhaseSampler};
 use crate::mesh::LabeledMesh;
@@ -215,20 +214,7 @@ impl InterfaceTracker for ContourTracker {
     }
 
     fn sample(&self, grid: &GridSpec) -> PhaseField {
-        let (phi, chi): (Vec<f64>, Vec<PhaseId>) = (0..grid.cell_count())
-            .into_par_iter()
-            .map(|c| {
-                let i = c % grid.dims[0];
-                let j = (c / grid.dims[0]) % grid.dims[1];
-                let k = c / (grid.dims[0] * grid.dims[1]);
-                self.phi_chi(grid.cell_center(i, j, k))
-            })
-            .unzip();
-        PhaseField {
-            grid: *grid,
-            phi,
-            chi,
-        }
+        PhaseField::from_cell_centres(grid, |x| self.phi_chi(x))
     }
 
     fn mesh(&self) -> &LabeledMesh {

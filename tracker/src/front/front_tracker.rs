@@ -305,21 +305,10 @@ impl InterfaceTracker for FrontTracker {
         let query = self
             .query
             .get_or_init(|| MeshQuery::new(&self.c.mesh, self.background));
-        let (phi, chi): (Vec<f64>, Vec<PhaseId>) = (0..grid.cell_count())
-            .into_par_iter()
-            .map(|c| {
-                let i = c % grid.dims[0];
-                let j = (c / grid.dims[0]) % grid.dims[1];
-                let k = c / (grid.dims[0] * grid.dims[1]);
-                let n = query.query(grid.cell_center(i, j, k));
-                (n.distance, n.phase)
-            })
-            .unzip();
-        PhaseField {
-            grid: *grid,
-            phi,
-            chi,
-        }
+        PhaseField::from_cell_centres(grid, |x| {
+            let n = query.query(x);
+            (n.distance, n.phase)
+        })
     }
 
     fn mesh(&self) -> &LabeledMesh {
