@@ -27,12 +27,7 @@ pub fn find_ambiguous_overlap(
         return None;
     }
     let ext = hi - lo;
-    let s = ext.max_element() / 16.0;
-    let counts = (ext / s).ceil().as_uvec3();
-    let tops: Vec<DVec3> = (0..counts.z)
-        .flat_map(|k| (0..counts.y).flat_map(move |j| (0..counts.x).map(move |i| (i, j, k))))
-        .map(|(i, j, k)| lo + DVec3::new(i as f64, j as f64, k as f64) * s)
-        .collect();
+    let (s, tops) = crate::volume::cover(lo, hi);
     // A point counts as inside a shape when at least this deep: two shapes that only touch
     // (boxes sharing a face) must not be reported because of rounding on the shared face.
     let tol = 1e-9 * ext.max_element();

@@ -20,6 +20,20 @@ pub const DEFAULT_DEPTH: u32 = 8;
 /// far below the per-cent volume drifts it is the reference for.
 pub const MESH_DEPTH: u32 = 6;
 
+/// The cubes of side `s` = longest extent / 16 that cover the box `lo..hi` (the last row may
+/// reach past `hi`), as `(s, lower corners)`: the roots of the adaptive subdivisions here and
+/// in [`crate::overlap`].
+pub(crate) fn cover(lo: DVec3, hi: DVec3) -> (f64, Vec<DVec3>) {
+    let ext = hi - lo;
+    let s = ext.max_element() / 16.0;
+    let counts = (ext / s).ceil().as_uvec3();
+    let tops = (0..counts.z)
+        .flat_map(|k| (0..counts.y).flat_map(move |j| (0..counts.x).map(move |i| (i, j, k))))
+        .map(|(i, j, k)| lo + DVec3::new(i as f64, j as f64, k as f64) * s)
+        .collect();
+    (s, tops)
+}
+
 /// Volume of each of `n_phases` phases inside the grid's box.
 pub fn reference_volumes(
     initial: &InitialPhases,
@@ -28,13 +42,7 @@ pub fn reference_volumes(
     max_depth: u32,
 ) -> Vec<f64> {
     let lo = grid.origin;
-    let ext = grid.upper() - lo;
-    let s = ext.max_element() / 16.0;
-    let counts = (ext / s).ceil().as_uvec3();
-    let tops: Vec<DVec3> = (0..counts.z)
-        .flat_map(|k| (0..counts.y).flat_map(move |j| (0..counts.x).map(move |i| (i, j, k))))
-        .map(|(i, j, k)| lo + DVec3::new(i as f64, j as f64, k as f64) * s)
-        .collect();
+    let (s, tops) = cover(lo, grid.upper());
     let upper = grid.upper();
     let parts: Vec<Vec<f64>> = tops
         .par_iter()

@@ -161,3 +161,17 @@ pub(crate) fn push_oriented(
     mesh.triangles.push(tri);
     mesh.labels.push([front, back]);
 }
+
+/// Two radius-¼ icospheres of phases 1 and 2 in phase 0, centred on the x axis with a gap of
+/// `gap` between them: the collision tests' standard pair.
+pub(crate) fn two_spheres(gap: f64, level: u32) -> LabeledMesh {
+    let mut m = icosphere(DVec3::new(-0.25 - gap / 2.0, 0.0, 0.0), 0.25, level, 1, 0);
+    m.append(&icosphere(
+        DVec3::new(0.25 + gap / 2.0, 0.0, 0.0),
+        0.25,
+        level,
+        2,
+        0,
+    ));
+    m
+}

@@ -2,21 +2,9 @@
 
 use super::*;
 use crate::front::predicates::tests::Rng;
-use crate::mesh::fixtures::icosphere;
+use crate::mesh::fixtures::{icosphere, two_spheres};
 use crate::LabeledMesh;
 use std::collections::BTreeSet;
-
-fn two_spheres(gap: f64, level: u32) -> LabeledMesh {
-    let mut m = icosphere(DVec3::new(-0.25 - gap / 2.0, 0.0, 0.0), 0.25, level, 1, 0);
-    m.append(&icosphere(
-        DVec3::new(0.25 + gap / 2.0, 0.0, 0.0),
-        0.25,
-        level,
-        2,
-        0,
-    ));
-    m
-}
 
 /// All pairs, no broad phase.
 fn brute_force(triangles: &[[u32; 3]], x0: &[DVec3], x1: &[DVec3]) -> BTreeSet<Contact> {

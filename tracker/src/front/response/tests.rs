@@ -4,20 +4,8 @@ use super::*;
 use crate::front::collision::detect;
 use crate::front::intersection::self_intersections;
 use crate::front::predicates::tests::Rng;
-use crate::mesh::fixtures::icosphere;
+use crate::mesh::fixtures::two_spheres;
 use crate::LabeledMesh;
-
-fn two_spheres(gap: f64, level: u32) -> LabeledMesh {
-    let mut m = icosphere(DVec3::new(-0.25 - gap / 2.0, 0.0, 0.0), 0.25, level, 1, 0);
-    m.append(&icosphere(
-        DVec3::new(0.25 + gap / 2.0, 0.0, 0.0),
-        0.25,
-        level,
-        2,
-        0,
-    ));
-    m
-}
 
 /// Left sphere moves by `+d` in x, the right one by `-d`, plus jitter of size `jitter`.
 fn driven(m: &LabeledMesh, d: f64, jitter: f64, seed: u64) -> Vec<DVec3> {
