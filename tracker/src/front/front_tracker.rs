@@ -11,7 +11,10 @@ use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField, OUTSIDE};
 use rayon::prelude::*;
 use thiserror::Error;
 
+use self::detach::detach_box;
+use self::untangle::untangle;
 use super::connectivity::Connectivity;
+use super::intersection::self_intersections;
 use super::params::{FrontParams, Integrator};
 use super::remesh::{improve, RemeshStats};
 use super::response::{resolve, CollisionParams};
@@ -28,6 +31,9 @@ pub enum FrontError {
     /// The starting mesh is not closed, label-consistent and non-degenerate.
     #[error("the starting mesh is invalid: {0}")]
     InvalidMesh(#[from] InvariantError),
+    /// The starting mesh has this many pairs of intersecting triangles.
+    #[error("the starting mesh intersects itself ({0} pairs of triangles)")]
+    Intersecting(usize),
     /// The parameters contradict each other or are out of range.
     #[error("invalid [tracker.front] parameters: {0}")]
     InvalidParams(String),
@@ -59,6 +65,9 @@ pub struct FrontTracker {
     report: FrontStepReport,
     /// Seconds spent this step integrating trajectories and resolving collisions.
     seconds: [f64; 2],
+    /// Volume enclosed by domain boundary faces taken off the starting mesh
+    /// ([`detach::detach_box`]); it belongs to the background phase.
+    detached_volume: f64,
 }
 
 impl FrontTracker {
@@ -72,7 +81,11 @@ impl FrontTracker {
         params: FrontParams,
     ) -> Result<FrontTracker, FrontError> {
         check(&mesh, 0.0)?;
-        validate(&params)?;
+        match self_intersections(&mesh).len() {
+            0 => {}
+            n => return Err(FrontError::Intersecting(n)),
+        }
+        params.validate().map_err(FrontError::InvalidParams)?;
         let target = match params.edge_length {
             Some(l) => l,
             None => mean_interface_edge(&mesh).ok_or_else(|| {
@@ -93,6 +106,7 @@ impl FrontTracker {
             query: OnceLock::new(),
             report: FrontStepReport::default(),
             seconds: [0.0; 2],
+            detached_volume: 0.0,
         };
         // A contoured mesh is far from the target sizing: remesh until the bulk of the work is
         // done, so that the first steps do not carry it (at most 4 passes).
@@ -108,7 +122,8 @@ impl FrontTracker {
 
     /// Starts from the contouring of exact initial φ, χ on `grid` (the contouring tracker's
     /// first mesh, closed at the domain boundary); without `params.edge_length` the target
-    /// edge length is the grid spacing.
+    /// edge length is the grid spacing. Boundary faces no interface reaches are dropped (their
+    /// enclosed volume still counts for the background phase), so such a front moves freely.
     pub fn from_sampler(
         grid: GridSpec,
         initial: &dyn PhaseSampler,
@@ -116,9 +131,20 @@ impl FrontTracker {
         background: PhaseId,
         mut params: FrontParams,
     ) -> Result<FrontTracker, FrontError> {
-        let (contour, _) = ContourTracker::new(grid, initial, n_phases, background);
+        // Contoured at half the spacing, the start has its sharp edges and junctions twice as
+        // close to the exact ones; remeshing coarsens it to the target while keeping features.
+        let fine = GridSpec {
+            origin: grid.origin,
+            h: 0.5 * grid.h,
+            dims: grid.dims.map(|d| 2 * d),
+        };
+        let (contour, _) = ContourTracker::new(fine, initial, n_phases, background);
         params.edge_length = Some(params.edge_length.unwrap_or(grid.h));
-        FrontTracker::new(contour.mesh().clone(), n_phases, background, params)
+        let (mut mesh, box_volume) = detach_box(contour.mesh().clone(), background);
+        untangle(&mut mesh).map_err(FrontError::Intersecting)?;
+        let mut tracker = FrontTracker::new(mesh, n_phases, background, params)?;
+        tracker.detached_volume = box_volume;
+        Ok(tracker)
     }
 
     /// Target edge length in domain units.
@@ -227,29 +253,6 @@ impl FrontTracker {
     }
 }
 
-/// Rejects contradictory or out-of-range parameters.
-fn validate(p: &FrontParams) -> Result<(), FrontError> {
-    let bad = |what: &str| Err(FrontError::InvalidParams(what.into()));
-    if let Some(l) = p.edge_length {
-        if !(l > 0.0 && l.is_finite()) {
-            return bad("edge_length must be positive");
-        }
-    }
-    if !(p.min_edge > 0.0 && p.min_edge * 2.0 < p.max_edge) {
-        return bad("need 0 < min_edge and 2 min_edge < max_edge (splits must not create edges to collapse)");
-    }
-    if !(0.0 <= p.min_angle && p.min_angle < 60.0 && 60.0 < p.max_angle && p.max_angle <= 180.0) {
-        return bad("need 0 <= min_angle < 60 < max_angle <= 180");
-    }
-    if !(p.min_area >= 0.0 && p.max_volume_change >= 0.0) {
-        return bad("min_area and max_volume_change must not be negative");
-    }
-    if !(0.0 < p.feature_angle && p.feature_angle < 180.0 && 0.0 <= p.poor_angle) {
-        return bad("need 0 < feature_angle < 180 and poor_angle >= 0");
-    }
-    Ok(())
-}
-
 /// Mean length of the edges of interface triangles (no `OUTSIDE` label).
 fn mean_interface_edge(mesh: &LabeledMesh) -> Option<f64> {
     let (sum, n) = mesh
@@ -316,9 +319,16 @@ impl InterfaceTracker for FrontTracker {
     }
 
     fn phase_volumes(&self) -> Vec<f64> {
-        self.c.mesh.phase_volumes(self.n_phases)
+        let mut volumes = self.c.mesh.phase_volumes(self.n_phases);
+        if let Some(v) = volumes.get_mut(self.background as usize) {
+            *v += self.detached_volume;
+        }
+        volumes
     }
 }
+
+mod detach;
+mod untangle;
 
 #[cfg(test)]
 mod tests;

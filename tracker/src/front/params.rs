@@ -2,10 +2,10 @@
 //! "we expose the angle bounds, edge length bounds, minimum area bound, and volume change
 //! bound as user parameters"), readable from a scene's `[tracker.front]` table.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// Time integrator of the vertex trajectories (paper 000 §4.1).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Integrator {
     /// Midpoint rule, second order.
@@ -18,12 +18,16 @@ pub enum Integrator {
 /// Remeshing and integration parameters. Lengths are relative to the target edge length `L`
 /// ([`FrontParams::edge_length`], or the mean interface edge length of the initial mesh), so
 /// one set of defaults serves every resolution.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FrontParams {
     /// Target edge length `L` in domain units; `None`: the mean interface edge length of the
-    /// mesh the tracker starts from.
+    /// mesh the tracker starts from (a scene's grid spacing `h`).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub edge_length: Option<f64>,
+    /// Largest step, as a multiple of `L / (max speed)`: vertices move at most `cfl` target
+    /// edge lengths per step, which keeps collision resolution local (default 1).
+    pub cfl: f64,
     /// Edges shorter than `min_edge * L` are collapsed (default 0.5, Brochu & Bridson 2009).
     pub min_edge: f64,
     /// Edges longer than `max_edge * L` are split; no operation may create a longer edge
@@ -60,6 +64,7 @@ impl Default for FrontParams {
     fn default() -> Self {
         FrontParams {
             edge_length: None,
+            cfl: 1.0,
             min_edge: 0.5,
             max_edge: 1.5,
             min_angle: 3.0,
@@ -72,6 +77,36 @@ impl Default for FrontParams {
             integrator: Integrator::Rk4,
             max_substep_depth: 4,
         }
+    }
+}
+
+impl FrontParams {
+    /// Rejects contradictory or out-of-range parameters, saying which.
+    pub fn validate(&self) -> Result<(), String> {
+        let p = self;
+        let bad = |what: &str| Err(what.to_string());
+        if let Some(l) = p.edge_length {
+            if !(l > 0.0 && l.is_finite()) {
+                return bad("edge_length must be positive");
+            }
+        }
+        if !(p.cfl > 0.0 && p.cfl.is_finite()) {
+            return bad("cfl must be positive");
+        }
+        if !(p.min_edge > 0.0 && p.min_edge * 2.0 < p.max_edge) {
+            return bad("need 0 < min_edge and 2 min_edge < max_edge (splits must not create edges to collapse)");
+        }
+        if !(0.0 <= p.min_angle && p.min_angle < 60.0 && 60.0 < p.max_angle && p.max_angle <= 180.0)
+        {
+            return bad("need 0 <= min_angle < 60 < max_angle <= 180");
+        }
+        if !(p.min_area >= 0.0 && p.max_volume_change >= 0.0) {
+            return bad("min_area and max_volume_change must not be negative");
+        }
+        if !(0.0 < p.feature_angle && p.feature_angle < 180.0 && 0.0 <= p.poor_angle) {
+            return bad("need 0 < feature_angle < 180 and poor_angle >= 0");
+        }
+        Ok(())
     }
 }
 

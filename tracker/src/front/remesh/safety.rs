@@ -59,13 +59,27 @@ impl Remesher<'_> {
         }
         let mut near = Vec::new();
         self.grid.query(lo, hi, &mut near);
+        // Swept boxes: two triangles whose boxes are disjoint cannot meet during the motion,
+        // which settles most candidates of the union box before any CCD test.
+        let swept = |tri: [u32; 3]| {
+            tri.iter()
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| {
+                    let (p, q) = (x0[v as usize], x1[v as usize]);
+                    (lo.min(p).min(q), hi.max(p).max(q))
+                })
+        };
         for &t in &tris {
             let tv = self.c.triangle(t);
+            let (tlo, thi) = swept(tv);
             for &s in &near {
                 if s == t || !self.c.is_live(s) {
                     continue;
                 }
                 let sv = self.c.triangle(s);
+                let (slo, shi) = swept(sv);
+                if tlo.cmpgt(shi).any() || slo.cmpgt(thi).any() {
+                    continue;
+                }
                 let ta = tv.map(alias);
                 let sa = sv.map(alias);
                 // Vertex of one against the other triangle.

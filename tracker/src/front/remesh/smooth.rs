@@ -84,8 +84,11 @@ impl Remesher<'_> {
             return false;
         };
         let x = self.c.position(v);
-        // Displacements below a millionth of the collapse length change nothing useful.
-        if (p - x).length() < 1e-6 * self.b.min_edge {
+        // Gauss–Seidel smoothing converges geometrically, and a vertex boxed in by its
+        // neighbours is asked to move a little again every step; moves below 1 % of the
+        // collapse length turn no angle by more than about a degree, and skipping them saves
+        // their collision check (measured: most of the smoothing time on enright).
+        if (p - x).length() < 1e-2 * self.b.min_edge {
             return false;
         }
         // No edge may grow past the split length.
