@@ -26,6 +26,23 @@ pub enum BenchCommand {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// The front tracker next to the contouring tracker over one period of a scene: volume
+    /// error, Hausdorff distance to the start, triangles, time per step, collision vs
+    /// remeshing share (paper 000 §7).
+    Front {
+        /// Built-in scene name or scene file (a periodic one).
+        #[arg(long, default_value = "enright")]
+        scene: String,
+        /// Resolutions (the front's target edge length is the grid spacing), comma separated.
+        #[arg(long, value_delimiter = ',', default_value = "128")]
+        res: Vec<i64>,
+        /// Stop after this many steps of each tracker (default: the whole period).
+        #[arg(long)]
+        steps: Option<usize>,
+        /// Run only this tracker (`contour` or `front`; default: both).
+        #[arg(long)]
+        only: Option<polyphase_scenes::TrackerKind>,
+    },
     /// Pressure and viscosity solves of a two-phase 1000:1 sphere, MIC(0)-PCG vs multigrid-PCG.
     Solver {
         /// Resolutions, comma separated.
@@ -71,6 +88,12 @@ pub fn bench(cmd: BenchCommand) -> Result<()> {
             }
             Ok(())
         }
+        BenchCommand::Front {
+            scene,
+            res,
+            steps,
+            only,
+        } => crate::bench_front::run(&scene, &res, steps, only),
         BenchCommand::Solver { res } => {
             let rows = polyphase_solver::bench::run(&res)?;
             println!("{}", polyphase_solver::bench::format_table(&rows));

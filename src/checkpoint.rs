@@ -1,7 +1,7 @@
 //! The checkpoint a run writes at every frame end (`DIR/checkpoint.bin`), from which
-//! `polyphase resume` continues bit for bit: the tracker's mesh, redistanced tree and volume
-//! targets, the solver's state, time and step count as exact f64 bits, plus the run's running totals for
-//! the summary. Little-endian binary: magic, format version, body, FNV-1a checksum of all
+//! `polyphase resume` continues bit for bit: the tracker's mesh, redistanced tree, volume
+//! targets and carried volume loss, the solver's state, time and step count as exact f64
+//! bits, plus the run's running totals for the summary. Little-endian binary: magic, format version, body, FNV-1a checksum of all
 //! bytes before it, so a truncated or damaged file is refused rather than half-read.
 
 use anyhow::{bail, ensure, Context, Result};
@@ -12,7 +12,7 @@ use polyphase_tracker::{ply, LabeledMesh, MdTree};
 pub const FILE: &str = "checkpoint.bin";
 
 const MAGIC: &[u8; 8] = b"PPHASECK";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 /// Running totals of a run (timings differ between runs; they only feed the summary).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -44,6 +44,8 @@ pub struct Checkpoint {
     pub tree: MdTree,
     /// The tracker's volume-correction targets.
     pub volume_targets: Option<Vec<f64>>,
+    /// The tracker's carried volume loss (per phase, added to the next step's targets).
+    pub carried_loss: Vec<f64>,
     /// The solver's state; `None` for a passive run.
     pub solver: Option<SolverState>,
     /// Totals for the summary.
@@ -76,6 +78,7 @@ impl Checkpoint {
         put_u64(&mut w, tree.len() as u64);
         w.extend_from_slice(&tree);
         put_option(&mut w, self.volume_targets.as_deref(), put_f64s);
+        put_f64s(&mut w, &self.carried_loss);
         put_option(&mut w, self.solver.as_ref(), |w, s| {
             put_f64(w, s.time);
             s.velocity.iter().for_each(|c| put_f64s(w, c));
@@ -124,6 +127,7 @@ impl Checkpoint {
         let tree_len = r.usize()?;
         let tree = MdTree::from_bytes(r.take(tree_len)?).context("tree")?;
         let volume_targets = r.option(Reader::f64s)?;
+        let carried_loss = r.f64s()?;
         let solver = r.option(|r| {
             Ok(SolverState {
                 time: r.f64()?,
@@ -150,6 +154,7 @@ impl Checkpoint {
             mesh,
             tree,
             volume_targets,
+            carried_loss,
             solver,
             totals: Totals {
                 wall,
@@ -259,6 +264,7 @@ mod tests {
             },
             tree: MdTree::build(&grid, &ball),
             volume_targets: Some(vec![1.0 / 3.0, 2.0 / 3.0]),
+            carried_loss: vec![0.0, -1e-7 / 3.0],
             solver: Some(SolverState {
                 time: 0.3000000000000001,
                 velocity: [vec![1e-300, -0.0], vec![f64::MIN_POSITIVE], vec![]],
@@ -283,6 +289,7 @@ mod tests {
         assert_eq!(back.mesh, c.mesh);
         assert_eq!(back.solver, c.solver);
         assert_eq!(back.totals, c.totals);
+        assert_eq!(back.carried_loss, c.carried_loss);
         // PartialEq on f64 would accept 0.0 for -0.0: compare the bits of the signed zero too.
         let v = &back.solver.as_ref().unwrap().velocity[0];
         assert_eq!(v[1].to_bits(), (-0.0f64).to_bits());

@@ -2,11 +2,13 @@
 #![deny(unsafe_code)]
 
 mod bench;
+mod bench_front;
 mod checkpoint;
 mod output;
 mod render;
 mod run;
 mod run_coupled;
+mod run_passive;
 mod summary;
 
 use std::path::PathBuf;
@@ -41,6 +43,9 @@ enum Command {
         /// Number of frames after the initial one (overrides the scene).
         #[arg(long)]
         frames: Option<i64>,
+        /// Interface tracker, `contour` or `front` (overrides the scene).
+        #[arg(long)]
+        tracker: Option<polyphase_scenes::TrackerKind>,
         /// Worker threads (default: all cores). Output is identical for any value.
         #[arg(long)]
         threads: Option<usize>,
@@ -78,6 +83,7 @@ fn main() -> ExitCode {
             out,
             resolution,
             frames,
+            tracker,
             threads,
             render,
         } => with_threads(threads, || {
@@ -86,6 +92,7 @@ fn main() -> ExitCode {
                 out,
                 resolution,
                 frames,
+                tracker,
             })
         })
         .and_then(|root| match render {

@@ -1,6 +1,7 @@
 //! `polyphase run` for a coupled scene: the solver's velocity moves the tracker (paper 004
 //! §7.5); frames, stats with per-stage timings, solver iterations and scene diagnostics, and
-//! a checkpoint (tracker mesh and tree, solver state) at every frame end.
+//! with the contouring tracker a checkpoint (tracker mesh and tree, solver state) at every
+//! frame end.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -19,15 +20,92 @@ use crate::run::{progress, Start};
 use crate::summary::Summary;
 
 /// Runs a validated coupled scene into `root` (already checked to be writable by `folder`),
-/// from frame 0 or from a checkpoint.
+/// from frame 0 or from a checkpoint, with the contouring tracker ([`crate::run::run`]
+/// refuses the front tracker on coupled scenes).
 pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path, start: Start) -> Result<()> {
+    let (sim, hash, progress_at, prior) = match start {
+        Start::Fresh(hash) => {
+            let (sim, first) = polyphase_coupling::from_scene(scene)?;
+            (sim, hash, Progress::Fresh(first), Totals::default())
+        }
+        Start::Resume(c) => {
+            let c = *c;
+            let tracker = ContourTracker::from_parts(
+                scene.grid,
+                c.mesh,
+                c.tree,
+                scene.file.phases.len(),
+                scene.initial.background,
+                c.volume_targets,
+                c.carried_loss,
+            );
+            let mut sim = polyphase_coupling::with_tracker(scene, tracker)?;
+            let solver = c
+                .solver
+                .context("the checkpoint has no solver state (it is of a passive run)")?;
+            sim.restore(solver, c.time, c.steps)?;
+            (sim, c.scene_hash, Progress::After(c.frame), c.totals)
+        }
+    };
+    let save = |frame: usize, sim: &CoupledSim<ContourTracker>, totals: Totals| {
+        folder.write_checkpoint(&Checkpoint {
+            scene_hash: hash,
+            frame,
+            time: sim.time(),
+            steps: sim.steps(),
+            mesh: sim.tracker().mesh().clone(),
+            tree: sim.tracker().tree().clone(),
+            volume_targets: sim.tracker().volume_targets().map(<[f64]>::to_vec),
+            carried_loss: sim.tracker().carried_loss().to_vec(),
+            solver: Some(sim.solver().state()),
+            totals,
+        })
+    };
+    simulate(scene, folder, root, sim, progress_at, prior, save)
+}
+
+/// Where the frame loop starts: a new simulation (with the stats of building its tracker),
+/// or after a checkpoint's frame.
+enum Progress {
+    Fresh(StepStats),
+    After(usize),
+}
+
+/// The frame loop: frames, grids, stats lines and (through `save`) checkpoints, then the
+/// summary.
+fn simulate<T: InterfaceTracker>(
+    scene: &Scene,
+    folder: &RunFolder,
+    root: &Path,
+    mut sim: CoupledSim<T>,
+    progress_at: Progress,
+    prior: Totals,
+    save: impl Fn(usize, &CoupledSim<T>, Totals) -> Result<()>,
+) -> Result<()> {
     let names = scene.phase_names();
     let reference = scene.reference_volumes();
     let frames = scene.file.time.frames as usize;
     let mut summary = Summary::new(&names);
-    let (mut sim, hash, done, prior) = match start {
-        Start::Fresh(hash) => {
-            let (sim, first) = polyphase_coupling::from_scene(scene)?;
+    for (name, secs) in &prior.stages {
+        summary.add_stage(name, *secs);
+    }
+    let sg = *sim.solver().grid();
+    eprintln!(
+        "{}: tracker {}×{}×{} cells (h = {:.4e}), solver {}×{}×{} cells (h = {:.4e}), {frames} frames, {:?} tracker, output {}",
+        scene.file.name,
+        scene.grid.dims[0],
+        scene.grid.dims[1],
+        scene.grid.dims[2],
+        scene.grid.h,
+        sg.dims[0],
+        sg.dims[1],
+        sg.dims[2],
+        sg.h,
+        scene.file.tracker.kind,
+        root.display()
+    );
+    let done = match progress_at {
+        Progress::Fresh(first) => {
             summary.add_step(&first);
             folder.write_frame(0, sim.tracker().mesh())?;
             folder.write_grids(0, &grids(&sim)?)?;
@@ -38,66 +116,18 @@ pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path, start: Start)
                 ..FrameReport::default()
             };
             folder.append_stats(&frame_line(0, 0.0, &initial, &sim, scene))?;
-            (sim, hash, 0, Totals::default())
+            save(
+                0,
+                &sim,
+                Totals {
+                    stages: summary.stages().to_vec(),
+                    ..Totals::default()
+                },
+            )?;
+            0
         }
-        Start::Resume(c) => {
-            let c = *c;
-            let tracker = ContourTracker::from_parts(
-                scene.grid,
-                c.mesh,
-                c.tree,
-                names.len(),
-                scene.initial.background,
-                c.volume_targets,
-            );
-            let mut sim = polyphase_coupling::with_tracker(scene, tracker)?;
-            let solver = c
-                .solver
-                .context("the checkpoint has no solver state (it is of a passive run)")?;
-            sim.restore(solver, c.time, c.steps)?;
-            (sim, c.scene_hash, c.frame, c.totals)
-        }
+        Progress::After(frame) => frame,
     };
-    for (name, secs) in &prior.stages {
-        summary.add_stage(name, *secs);
-    }
-    let sg = *sim.solver().grid();
-    eprintln!(
-        "{}: tracker {}×{}×{} cells (h = {:.4e}), solver {}×{}×{} cells (h = {:.4e}), {frames} frames, output {}",
-        scene.file.name,
-        scene.grid.dims[0],
-        scene.grid.dims[1],
-        scene.grid.dims[2],
-        scene.grid.h,
-        sg.dims[0],
-        sg.dims[1],
-        sg.dims[2],
-        sg.h,
-        root.display()
-    );
-    let save = |frame: usize, sim: &CoupledSim<ContourTracker>, totals: Totals| {
-        folder.write_checkpoint(&Checkpoint {
-            scene_hash: hash,
-            frame,
-            time: sim.time(),
-            steps: sim.steps(),
-            mesh: sim.tracker().mesh().clone(),
-            tree: sim.tracker().tree().clone(),
-            volume_targets: sim.tracker().volume_targets().map(<[f64]>::to_vec),
-            solver: Some(sim.solver().state()),
-            totals,
-        })
-    };
-    if done == 0 {
-        save(
-            0,
-            &sim,
-            Totals {
-                stages: summary.stages().to_vec(),
-                ..Totals::default()
-            },
-        )?;
-    }
 
     let bar = progress(frames);
     bar.set_position(done as u64);
@@ -151,7 +181,7 @@ pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path, start: Start)
 
 /// The frame's grids on the solver's cells, as one OpenVDB file: φ and χ as the solver reads
 /// them, the velocity at the cell centres ("v") and the pressure ("p").
-fn grids(sim: &CoupledSim<ContourTracker>) -> Result<Vec<u8>> {
+fn grids<T: InterfaceTracker>(sim: &CoupledSim<T>) -> Result<Vec<u8>> {
     let solver = sim.solver();
     let grid = *solver.grid();
     let mut field = sim.tracker().sample(&grid);
@@ -167,11 +197,11 @@ fn grids(sim: &CoupledSim<ContourTracker>) -> Result<Vec<u8>> {
     Ok(encode(&grid, &out, Compression::Zip)?)
 }
 
-fn frame_line(
+fn frame_line<T: InterfaceTracker>(
     frame: usize,
     time: f64,
     report: &FrameReport,
-    sim: &CoupledSim<ContourTracker>,
+    sim: &CoupledSim<T>,
     scene: &Scene,
 ) -> Value {
     let tracker = sim.tracker();
@@ -205,7 +235,7 @@ fn frame_line(
 
 /// Scene-specific measurements: the surge front of a single column, the bubble and spike
 /// tips of Rayleigh–Taylor (the phases are the scene's second and first).
-fn add_diagnostics(line: &mut Value, scene: &Scene, tracker: &ContourTracker) {
+fn add_diagnostics(line: &mut Value, scene: &Scene, tracker: &impl InterfaceTracker) {
     let mesh = tracker.mesh();
     match scene.file.name.as_str() {
         "dambreak_column" => {

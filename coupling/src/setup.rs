@@ -5,7 +5,7 @@ use polyphase_scenes::{PreconditionerSpec, Scene};
 use polyphase_solver::{
     LinearSolverSettings, PhaseProps, PreconditionerKind, Solver, SolverConfig,
 };
-use polyphase_tracker::{ContourTracker, StepStats};
+use polyphase_tracker::{ContourTracker, InterfaceTracker, StepStats};
 
 use crate::error::CouplingError;
 use crate::sim::{CoupledSim, TimeControl};
@@ -26,12 +26,13 @@ pub fn from_scene(scene: &Scene) -> Result<(CoupledSim<ContourTracker>, StepStat
     Ok((CoupledSim::new(solver, tracker, phases, control)?, first))
 }
 
-/// The coupled simulation of a coupled scene around a given tracker (one restored from a
-/// checkpoint), with the solver at rest at time 0 until it is restored too.
-pub fn with_tracker(
+/// The coupled simulation of a coupled scene around a given tracker (a front tracker, or a
+/// contouring tracker restored from a checkpoint), with the solver at rest at time 0 until it
+/// is restored too.
+pub fn with_tracker<T: InterfaceTracker>(
     scene: &Scene,
-    tracker: ContourTracker,
-) -> Result<CoupledSim<ContourTracker>, CouplingError> {
+    tracker: T,
+) -> Result<CoupledSim<T>, CouplingError> {
     let (solver, phases, control) = solver_parts(scene)?;
     CoupledSim::new(solver, tracker, phases, control)
 }
@@ -69,8 +70,7 @@ fn solver_parts(scene: &Scene) -> Result<(Solver, Vec<PhaseProps>, TimeControl),
     let control = TimeControl {
         cfl: spec.cfl,
         max_dt: spec.max_dt.unwrap_or(scene.frame_dt()),
-        // The scene's `time.cfl` is the tracker's step in its own cells.
-        tracker_travel: scene.file.time.cfl * scene.grid.h,
+        tracker_travel: scene.tracker_travel(),
     };
     Ok((solver, phases, control))
 }

@@ -70,7 +70,10 @@ pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
 
 #[cfg(test)]
 mod tests {
+    use polyphase_tracker::front::params::FrontParams;
+
     use super::*;
+    use crate::{TrackerKind, TrackerSpec};
 
     #[test]
     fn every_builtin_parses_and_round_trips() {
@@ -82,6 +85,31 @@ mod tests {
             assert_eq!(again.file, scene.file, "{name}");
             assert_eq!(again.grid, scene.grid, "{name}");
         }
+    }
+
+    #[test]
+    fn the_tracker_is_a_kind_or_a_table_and_resolves_to_the_table() {
+        let good = BUILTIN[0].1;
+        let short = good.replace("background = ", "tracker = \"front\"\nbackground = ");
+        let table = format!("{good}\n[tracker]\nkind = \"front\"\n[tracker.front]\ncfl = 0.5\n");
+        let short = Scene::parse(&short, "short").unwrap();
+        let table = Scene::parse(&table, "table").unwrap();
+        assert_eq!(short.file.tracker.kind, TrackerKind::Front);
+        let defaults = FrontParams::default();
+        assert_eq!(short.file.tracker.front.as_ref(), Some(&defaults));
+        let front = table.file.tracker.front.clone().unwrap();
+        assert_eq!(front.cfl, 0.5);
+        assert_eq!(front.max_edge, defaults.max_edge);
+        let again = Scene::parse(&table.to_toml(), "resolved").unwrap();
+        assert_eq!(again.file.tracker, table.file.tracker);
+        // The front moves at most cfl · h per step (edge_length defaults to h): half the cfl
+        // takes twice the steps, up to the rounding up of the count.
+        let (a, b) = (short.steps_per_frame(), table.steps_per_frame());
+        assert!(b == 2 * a || b == 2 * a - 1, "{a} vs {b}");
+        assert_eq!(
+            Scene::parse(good, "contour").unwrap().file.tracker,
+            TrackerSpec::default()
+        );
     }
 
     #[test]
@@ -123,6 +151,22 @@ mod tests {
             (
                 good.replace("[1.0, 1.0, 1.0]", "[1.0, inf, 1.0]"),
                 "domain.hi[1]",
+            ),
+            (
+                good.replace("background = ", "tracker = \"fronts\"\nbackground = "),
+                "unknown variant `fronts`",
+            ),
+            (
+                format!("{good}\n[tracker]\nkind = \"front\"\n[tracker.front]\nmax_edges = 2.0\n"),
+                "unknown field `max_edges`",
+            ),
+            (
+                format!("{good}\n[tracker]\nkind = \"front\"\n[tracker.front]\nmin_edge = 0.9\n"),
+                "tracker.front: need 0 < min_edge and 2 min_edge < max_edge",
+            ),
+            (
+                format!("{good}\n[tracker.front]\ncfl = 0.5\n"),
+                "tracker.front: is read only by the front tracker",
             ),
         ];
         for (text, expect) in cases {

@@ -1,7 +1,11 @@
 //! The scene file as written by users (TOML, serde). Every optional field has a default, and
 //! the resolved scene (defaults filled in) serialises back to the same format.
 
-use serde::{Deserialize, Serialize};
+use std::fmt;
+
+use polyphase_tracker::front::params::FrontParams;
+use serde::de::{self, MapAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize};
 
 /// A whole scene file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -12,9 +16,9 @@ pub struct SceneFile {
     /// One line shown by `polyphase scenes`.
     #[serde(default)]
     pub description: String,
-    /// Which interface tracker runs the scene.
+    /// Which interface tracker runs the scene, and its parameters.
     #[serde(default)]
-    pub tracker: TrackerKind,
+    pub tracker: TrackerSpec,
     /// Whether each tracker step gives every phase back its exact initial volume by a small
     /// offset of the interfaces (`polyphase_tracker::volume_correction`; not in paper 004).
     #[serde(default = "default_true")]
@@ -74,6 +78,49 @@ pub struct RenderHints {
     pub fps: Option<u32>,
 }
 
+/// The tracker of a scene: `tracker = "front"` (a kind alone), or a `[tracker]` table with
+/// `kind` and, for the front tracker, `[tracker.front]` parameters (documented on
+/// [`FrontParams`]; absent keys keep their defaults). The resolved scene always has the table.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct TrackerSpec {
+    pub kind: TrackerKind,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub front: Option<FrontParams>,
+}
+
+/// The `[tracker]` table form of [`TrackerSpec`].
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TrackerTable {
+    #[serde(default)]
+    kind: TrackerKind,
+    front: Option<FrontParams>,
+}
+
+impl<'de> Deserialize<'de> for TrackerSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Either;
+        impl<'de> Visitor<'de> for Either {
+            type Value = TrackerSpec;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("\"contour\", \"front\" or a [tracker] table")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<TrackerSpec, E> {
+                let kind = TrackerKind::deserialize(de::value::StrDeserializer::<E>::new(v))?;
+                Ok(TrackerSpec { kind, front: None })
+            }
+            fn visit_map<M: MapAccess<'de>>(self, m: M) -> Result<TrackerSpec, M::Error> {
+                let t = TrackerTable::deserialize(de::value::MapAccessDeserializer::new(m))?;
+                Ok(TrackerSpec {
+                    kind: t.kind,
+                    front: t.front,
+                })
+            }
+        }
+        d.deserialize_any(Either)
+    }
+}
+
 /// The interface tracker a scene runs with (DESIGN.md "InterfaceTracker").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -83,6 +130,19 @@ pub enum TrackerKind {
     Contour,
     /// Explicit front tracking (paper 000).
     Front,
+}
+
+impl std::str::FromStr for TrackerKind {
+    type Err = String;
+
+    /// `contour` or `front`, as in scene files.
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "contour" => Ok(TrackerKind::Contour),
+            "front" => Ok(TrackerKind::Front),
+            _ => Err(format!("unknown tracker '{s}' (trackers: contour, front)")),
+        }
+    }
 }
 
 /// The simulation box.

@@ -16,7 +16,7 @@ pub mod volume;
 
 pub use builtin::{builtin, load, BUILTIN, DEFAULT_SCENE};
 pub use error::SceneError;
-pub use format::{PreconditionerSpec, SceneFile, SolverSpec, TrackerKind};
+pub use format::{PreconditionerSpec, SceneFile, SolverSpec, TrackerKind, TrackerSpec};
 pub use scene::Scene;
 pub use shapes::InitialPhases;
 pub use velocity::AnalyticVelocity;

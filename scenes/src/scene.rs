@@ -6,7 +6,11 @@ use glam::DVec3;
 use polyphase_grid::{GridSpec, PhaseId};
 
 use crate::error::SceneError;
-use crate::format::{HalfSpaceSpec, SceneFile, ShapeSpec, SolverSpec, VelocitySpec};
+use polyphase_tracker::front::params::FrontParams;
+
+use crate::format::{
+    HalfSpaceSpec, SceneFile, ShapeSpec, SolverSpec, TrackerKind, TrackerSpec, VelocitySpec,
+};
 use crate::mesh_file::SceneBase;
 use crate::mesh_sdf::MeshSdf;
 use crate::overlap::{find_ambiguous_overlap, DEFAULT_DEPTH as OVERLAP_DEPTH};
@@ -75,6 +79,7 @@ impl Scene {
         }
         positive(file.time.end, "time.end", &bad)?;
         positive(file.time.cfl, "time.cfl", &bad)?;
+        check_tracker(&mut file.tracker, &bad)?;
         if file.time.frames < 1 {
             return Err(bad(
                 "time.frames",
@@ -159,6 +164,16 @@ impl Scene {
         Scene::from_file(file, "command line")
     }
 
+    /// Re-validates with another tracker (command-line override); the scene's own
+    /// `[tracker.front]` parameters are kept when it names the front tracker already.
+    pub fn with_tracker(&self, kind: TrackerKind) -> Result<Scene, SceneError> {
+        let mut file = self.file.clone();
+        if file.tracker.kind != kind {
+            file.tracker = TrackerSpec { kind, front: None };
+        }
+        Scene::from_file(file, "command line")
+    }
+
     /// Exact per-phase volumes of the initial shapes (the reference for volume drift).
     pub fn reference_volumes(&self) -> Vec<f64> {
         let has_mesh = self
@@ -202,11 +217,41 @@ impl Scene {
         self.file.time.end / self.file.time.frames as f64
     }
 
-    /// Tracker steps per frame: enough that no step moves a point more than `cfl` cells.
+    /// How far one tracker step may move the interfaces: `time.cfl` cells, or with the front
+    /// tracker `tracker.front.cfl` target edge lengths.
+    pub fn tracker_travel(&self) -> f64 {
+        match &self.file.tracker.front {
+            Some(front) if self.file.tracker.kind == TrackerKind::Front => {
+                front.cfl * front.edge_length.unwrap_or(self.grid.h)
+            }
+            _ => self.file.time.cfl * self.grid.h,
+        }
+    }
+
+    /// Tracker steps per frame of a passive scene: enough that no step moves a point more
+    /// than [`Scene::tracker_travel`].
     pub fn steps_per_frame(&self) -> usize {
         let vmax = self.velocity.max_speed(self.grid.origin, self.grid.upper());
-        let dt_max = self.file.time.cfl * self.grid.h / vmax.max(1e-300);
+        let travel = self.tracker_travel();
+        let dt_max = travel / vmax.max(1e-300);
         (self.frame_dt() / dt_max).ceil().max(1.0) as usize
+    }
+}
+
+/// Fills in the front tracker's defaults and checks them; `[tracker.front]` with the contouring
+/// tracker is a mistake worth naming (the parameters would be ignored).
+fn check_tracker(spec: &mut TrackerSpec, bad: &Bad) -> Result<(), SceneError> {
+    match spec.kind {
+        TrackerKind::Contour if spec.front.is_some() => Err(bad(
+            "tracker.front",
+            "is read only by the front tracker; set tracker.kind = \"front\" or remove it".into(),
+        )),
+        TrackerKind::Contour => Ok(()),
+        TrackerKind::Front => spec
+            .front
+            .get_or_insert_with(FrontParams::default)
+            .validate()
+            .map_err(|e| bad("tracker.front", e)),
     }
 }
 

@@ -12,7 +12,7 @@ use crate::contour::{MdTree, PhaseSampler};
 use crate::mesh::LabeledMesh;
 use crate::query::MeshQuery;
 use crate::tracker::{InterfaceTracker, StepStats, TrackerError};
-use crate::volume_correction::VolumeShift;
+use crate::volume_correction::{carried_loss, first_aim, missed, reaim, VolumeShift, MAX_RETRIES};
 
 /// Tracker state: the current mesh, its exact query structure and the redistanced tree.
 pub struct ContourTracker {
@@ -24,6 +24,9 @@ pub struct ContourTracker {
     query: MeshQuery,
     /// Phase volumes each step's mesh is corrected back to; `None` turns the correction off.
     volume_targets: Option<Vec<f64>>,
+    /// Per phase, the last step's loss beyond what its correction aimed for; the next step
+    /// aims that much above the target (see [`crate::volume_correction::carried_loss`]).
+    carried_loss: Vec<f64>,
 }
 
 impl ContourTracker {
@@ -45,12 +48,14 @@ impl ContourTracker {
             mesh,
             query,
             volume_targets,
+            carried_loss: vec![0.0; n_phases],
         };
         (tracker, stats)
     }
 
     /// A tracker from the saved state of another (a checkpoint): its mesh, its redistanced
-    /// tree and volume targets. It continues exactly as the one they were taken from.
+    /// tree, volume targets and carried loss ([`ContourTracker::carried_loss`]). It continues
+    /// exactly as the one they were taken from.
     pub fn from_parts(
         grid: GridSpec,
         mesh: LabeledMesh,
@@ -58,6 +63,7 @@ impl ContourTracker {
         n_phases: usize,
         background: PhaseId,
         volume_targets: Option<Vec<f64>>,
+        carried_loss: Vec<f64>,
     ) -> ContourTracker {
         let query = MeshQuery::new(&mesh, background);
         ContourTracker {
@@ -68,6 +74,7 @@ impl ContourTracker {
             mesh,
             query,
             volume_targets,
+            carried_loss,
         }
     }
 
@@ -78,14 +85,21 @@ impl ContourTracker {
 
     /// Sets the per-phase volumes every step's mesh is corrected back to (see
     /// [`crate::volume_correction`]); `None` switches the correction off. By default the
-    /// targets are the first mesh's volumes.
+    /// targets are the first mesh's volumes. The carried loss starts again from zero.
     pub fn set_volume_targets(&mut self, targets: Option<Vec<f64>>) {
         self.volume_targets = targets;
+        self.carried_loss = vec![0.0; self.n_phases];
     }
 
     /// The volumes the correction restores, if it is on.
     pub fn volume_targets(&self) -> Option<&[f64]> {
         self.volume_targets.as_deref()
+    }
+
+    /// Per phase, the last step's loss the next step adds to its target (zeros when the
+    /// correction is off); part of the state a checkpoint saves.
+    pub fn carried_loss(&self) -> &[f64] {
+        &self.carried_loss
     }
 
     /// The tracker's grid.
@@ -183,7 +197,7 @@ impl InterfaceTracker for ContourTracker {
         dt: f64,
     ) -> Result<StepStats, TrackerError> {
         let bad = AtomicBool::new(false);
-        let departure = Departure {
+        let mut departure = Departure {
             previous: &self.query,
             velocity,
             lo: self.grid.origin,
@@ -191,21 +205,50 @@ impl InterfaceTracker for ContourTracker {
             t,
             dt,
             bad: &bad,
-            // A quarter cell per step at most: a sheet lost in one step comes back over a few.
-            shift: self.volume_targets.as_ref().map(|targets| {
-                VolumeShift::new(&self.mesh, targets, self.background, 0.25 * self.grid.h)
-            }),
+            shift: None,
         };
-        let (tree, mesh, query, stats) = rebuild(&self.grid, &departure, self.background);
-        if bad.load(Ordering::Relaxed) {
-            let c = (self.grid.origin + self.grid.upper()) * 0.5;
-            let x = first_non_finite(velocity, &self.grid, t, dt).unwrap_or(c);
-            return Err(TrackerError::NonFiniteVelocity {
-                x: x.x,
-                y: x.y,
-                z: x.z,
-                t,
-            });
+        let mut aim = self
+            .volume_targets
+            .as_ref()
+            .map(|targets| first_aim(targets, &self.carried_loss));
+        let mut retried: Vec<(&'static str, f64)> = Vec::new();
+        let mut retries = 0;
+        let (tree, mesh, query, mut stats) = loop {
+            // A quarter cell per step at most: a sheet lost in one step comes back over a few.
+            departure.shift = aim
+                .as_ref()
+                .map(|aim| VolumeShift::new(&self.mesh, aim, self.background, 0.25 * self.grid.h));
+            let built = rebuild(&self.grid, &departure, self.background);
+            if bad.load(Ordering::Relaxed) {
+                let c = (self.grid.origin + self.grid.upper()) * 0.5;
+                let x = first_non_finite(velocity, &self.grid, t, dt).unwrap_or(c);
+                return Err(TrackerError::NonFiniteVelocity {
+                    x: x.x,
+                    y: x.y,
+                    z: x.z,
+                    t,
+                });
+            }
+            let (Some(targets), Some(shift), Some(aim)) =
+                (&self.volume_targets, &departure.shift, &mut aim)
+            else {
+                break built;
+            };
+            let after = built.1.phase_volumes(self.n_phases);
+            if retries == MAX_RETRIES || !missed(shift.aimed(), &after, targets) {
+                self.carried_loss = carried_loss(shift.aimed(), &after, targets);
+                break built;
+            }
+            reaim(aim, shift.aimed(), &after, targets);
+            retried.extend(built.3.stages);
+            retries += 1;
+        };
+        // The discarded tries' time counts in their stages.
+        for (name, secs) in retried {
+            match stats.stages.iter_mut().find(|(n, _)| *n == name) {
+                Some((_, total)) => *total += secs,
+                None => stats.stages.push((name, secs)),
+            }
         }
         self.tree = tree;
         self.mesh = mesh;

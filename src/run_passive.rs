@@ -1,0 +1,269 @@
+//! Passive runs: a scene's analytic velocity moves the interfaces, frame by frame, with either
+//! tracker. Contouring runs write a checkpoint at every frame end (`polyphase resume`).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use polyphase_scenes::{Scene, TrackerKind};
+use polyphase_tracker::front::front_tracker::FrontTracker;
+use polyphase_tracker::{metrics, ContourTracker, InterfaceTracker, LabeledMesh, StepStats};
+use serde_json::{json, Value};
+
+use crate::checkpoint::{Checkpoint, Totals};
+use crate::output::RunFolder;
+use crate::run::{progress, Start};
+use crate::summary::Summary;
+
+/// Runs (or resumes) a passive scene in `folder`.
+pub fn run_passive(scene: &Scene, folder: &RunFolder, root: &Path, start: Start) -> Result<()> {
+    let frames = scene.file.time.frames as usize;
+    eprintln!(
+        "{}: {}×{}×{} cells (h = {:.4e}), {frames} frames × {} steps, {:?} tracker, output {}",
+        scene.file.name,
+        scene.grid.dims[0],
+        scene.grid.dims[1],
+        scene.grid.dims[2],
+        scene.grid.h,
+        scene.steps_per_frame(),
+        scene.file.tracker.kind,
+        root.display()
+    );
+    match scene.file.tracker.kind {
+        TrackerKind::Contour => run_contour(scene, folder, start),
+        TrackerKind::Front => run_front(scene, folder),
+    }
+}
+
+/// The contouring tracker's first state: its mesh and the stats of building it.
+fn first_contour(scene: &Scene) -> (ContourTracker, StepStats) {
+    let initial = |x| scene.initial.sample(x);
+    let n_phases = scene.file.phases.len();
+    let (mut tracker, first) =
+        ContourTracker::new(scene.grid, &initial, n_phases, scene.initial.background);
+    tracker.set_volume_targets(scene.volume_targets());
+    (tracker, first)
+}
+
+fn run_contour(scene: &Scene, folder: &RunFolder, start: Start) -> Result<()> {
+    let n_phases = scene.file.phases.len();
+    let steps = scene.steps_per_frame();
+    let (tracker, hash, done, prior) = match start {
+        Start::Fresh(hash) => {
+            let (tracker, first) = first_contour(scene);
+            (tracker, hash, Progress::Fresh(first), Totals::default())
+        }
+        Start::Resume(c) => {
+            let c = *c;
+            let tracker = ContourTracker::from_parts(
+                scene.grid,
+                c.mesh,
+                c.tree,
+                n_phases,
+                scene.initial.background,
+                c.volume_targets,
+                c.carried_loss,
+            );
+            (tracker, c.scene_hash, Progress::After(c.frame), c.totals)
+        }
+    };
+    // The periodic error of the last frame compares with the first mesh (rebuilt exactly when
+    // resuming: the initial build is deterministic).
+    let initial_mesh = match done {
+        Progress::Fresh(_) => tracker.mesh().clone(),
+        Progress::After(_) => first_contour(scene).0.mesh().clone(),
+    };
+    let save = |frame: usize, tracker: &ContourTracker, summary: &Summary, wall: f64| {
+        folder.write_checkpoint(&Checkpoint {
+            scene_hash: hash,
+            frame,
+            time: frame as f64 * scene.frame_dt(),
+            steps: frame * steps,
+            mesh: tracker.mesh().clone(),
+            tree: tracker.tree().clone(),
+            volume_targets: tracker.volume_targets().map(<[f64]>::to_vec),
+            carried_loss: tracker.carried_loss().to_vec(),
+            solver: None,
+            totals: Totals {
+                wall,
+                stages: summary.stages().to_vec(),
+                ..Totals::default()
+            },
+        })
+    };
+    track(scene, folder, tracker, done, prior, &initial_mesh, save)
+}
+
+fn run_front(scene: &Scene, folder: &RunFolder) -> Result<()> {
+    let initial = |x| scene.initial.sample(x);
+    let params = scene.file.tracker.front.clone().unwrap_or_default();
+    let started = Instant::now();
+    let tracker = FrontTracker::from_sampler(
+        scene.grid,
+        &initial,
+        scene.file.phases.len(),
+        scene.initial.background,
+        params,
+    )
+    .with_context(|| format!("{}: starting the front tracker", scene.file.name))?;
+    let first = StepStats {
+        stages: vec![("build", started.elapsed().as_secs_f64())],
+        ..StepStats::default()
+    };
+    let initial_mesh = tracker.mesh().clone();
+    // Front runs keep no checkpoint: `resume` is for contouring runs.
+    let save = |_: usize, _: &FrontTracker, _: &Summary, _: f64| Ok(());
+    track(
+        scene,
+        folder,
+        tracker,
+        Progress::Fresh(first),
+        Totals::default(),
+        &initial_mesh,
+        save,
+    )
+}
+
+/// Where the frame loop starts: a new tracker (with the stats of building it), or after a
+/// checkpoint's frame.
+enum Progress {
+    Fresh(StepStats),
+    After(usize),
+}
+
+/// The frame loop: advances `tracker` through every remaining frame, writing the frame mesh,
+/// its stats line and (through `save`) a checkpoint at each frame end, then the summary.
+fn track<T: InterfaceTracker>(
+    scene: &Scene,
+    folder: &RunFolder,
+    mut tracker: T,
+    progress_at: Progress,
+    prior: Totals,
+    initial_mesh: &LabeledMesh,
+    save: impl Fn(usize, &T, &Summary, f64) -> Result<()>,
+) -> Result<()> {
+    let names = scene.phase_names();
+    let reference = scene.reference_volumes();
+    let frames = scene.file.time.frames as usize;
+    let steps = scene.steps_per_frame();
+    let dt = scene.frame_dt() / steps as f64;
+    let mut summary = Summary::new(&names);
+    for (name, secs) in &prior.stages {
+        summary.add_stage(name, *secs);
+    }
+    let done = match progress_at {
+        Progress::Fresh(first) => {
+            summary.add_step(&first);
+            folder.write_frame(0, tracker.mesh())?;
+            folder.append_stats(&frame_line(0, 0.0, 0, &first, &tracker, &names))?;
+            save(0, &tracker, &summary, 0.0)?;
+            0
+        }
+        Progress::After(frame) => frame,
+    };
+    let bar = progress(frames * steps);
+    bar.set_position((done * steps) as u64);
+    let started = Instant::now();
+    for frame in done + 1..=frames {
+        let mut stats = StepStats::default();
+        for s in 0..steps {
+            let t = ((frame - 1) * steps + s) as f64 * dt;
+            let step = tracker
+                .advance(&scene.velocity, t, dt)
+                .with_context(|| format!("frame {frame}, step {s}"))?;
+            summary.add_step(&step);
+            accumulate(&mut stats, &step);
+            bar.inc(1);
+        }
+        let time = frame as f64 * scene.frame_dt();
+        let write_start = Instant::now();
+        folder.write_frame(frame, tracker.mesh())?;
+        stats
+            .stages
+            .push(("write", write_start.elapsed().as_secs_f64()));
+        let mut line = frame_line(frame, time, steps, &stats, &tracker, &names);
+        if frame == frames && scene.file.time.periodic {
+            add_period_errors(&mut line, &tracker, initial_mesh, &reference, &names, scene);
+        }
+        folder.append_stats(&line)?;
+        save(
+            frame,
+            &tracker,
+            &summary,
+            prior.wall + started.elapsed().as_secs_f64(),
+        )?;
+    }
+    bar.finish_and_clear();
+    summary.finish(
+        frames,
+        frames * steps,
+        prior.wall + started.elapsed().as_secs_f64(),
+        &reference,
+        &tracker.phase_volumes(),
+        tracker.mesh(),
+    );
+    print!("{}", summary.table());
+    folder.append_stats(&summary.json())?;
+    Ok(())
+}
+
+fn accumulate(total: &mut StepStats, step: &StepStats) {
+    for &(name, secs) in &step.stages {
+        match total.stages.iter_mut().find(|(n, _)| *n == name) {
+            Some(entry) => entry.1 += secs,
+            None => total.stages.push((name, secs)),
+        }
+    }
+    total.cells = step.cells;
+    total.interface_cells = step.interface_cells;
+}
+
+fn frame_line(
+    frame: usize,
+    time: f64,
+    steps: usize,
+    stats: &StepStats,
+    tracker: &impl InterfaceTracker,
+    names: &[String],
+) -> Value {
+    let volumes: BTreeMap<&str, f64> = names
+        .iter()
+        .map(String::as_str)
+        .zip(tracker.phase_volumes())
+        .collect();
+    let timings: BTreeMap<&str, f64> = stats.stages.iter().copied().collect();
+    let mesh = tracker.mesh();
+    json!({
+        "frame": frame,
+        "time": time,
+        "steps": steps,
+        "phase_volumes": volumes,
+        "timings": timings,
+        "mesh": { "vertices": mesh.vertices.len(), "triangles": mesh.triangles.len() },
+        "cells": stats.cells,
+        "interface_cells": stats.interface_cells,
+    })
+}
+
+/// For a periodic flow the shapes should be back where they started: relative volume error per
+/// phase against the exact initial volumes, and the Hausdorff distance to the initial mesh.
+fn add_period_errors(
+    line: &mut Value,
+    tracker: &impl InterfaceTracker,
+    initial_mesh: &LabeledMesh,
+    reference: &[f64],
+    names: &[String],
+    scene: &Scene,
+) {
+    let volumes = tracker.phase_volumes();
+    let errors: BTreeMap<&str, f64> = names
+        .iter()
+        .zip(volumes.iter().zip(reference))
+        .filter(|(_, (_, r))| **r > 0.0)
+        .map(|(n, (v, r))| (n.as_str(), (v - r) / r))
+        .collect();
+    let h = metrics::hausdorff(tracker.mesh(), initial_mesh);
+    line["volume_error"] = json!(errors);
+    line["hausdorff"] = json!({ "absolute": h, "over_h": h / scene.grid.h });
+}
