@@ -44,6 +44,7 @@ pub struct RemeshStats {
 /// Remeshes `c` in place toward edge length `target` and compacts it (indices change).
 pub fn improve(c: &mut Connectivity, params: &FrontParams, target: f64) -> RemeshStats {
     let mut r = Remesher::new(c, Bounds::new(params, target));
+    r.butterfly = params.butterfly;
     r.split_pass();
     r.collapse_pass();
     r.flip_pass();
@@ -100,6 +101,8 @@ pub(crate) struct Remesher<'a> {
     x1: Vec<DVec3>,
     /// In the fail-safe pass only collision safety, inversion and non-degeneracy are checked.
     failsafe: bool,
+    /// Splits move the new vertex to its butterfly point ([`FrontParams::butterfly`]).
+    butterfly: bool,
     stats: RemeshStats,
     /// Runs the invariant checks after every operation (tests).
     #[cfg(test)]
@@ -125,6 +128,7 @@ impl<'a> Remesher<'a> {
             grid,
             x1,
             failsafe: false,
+            butterfly: false,
             stats: RemeshStats::default(),
             #[cfg(test)]
             verify: false,

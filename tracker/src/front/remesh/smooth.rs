@@ -92,9 +92,16 @@ impl Remesher<'_> {
             return false;
         }
         // No edge may grow past the split length.
+        self.try_move(v, p, self.b.max_edge)
+    }
+
+    /// Moves `v` to `p` if no edge grows past `max_len` (or past its length, if longer), no
+    /// triangle turns over, the bounds allow and the motion is collision-safe.
+    pub(super) fn try_move(&mut self, v: u32, p: DVec3, max_len: f64) -> bool {
+        let x = self.c.position(v);
         let too_long = self.c.neighbours(v).iter().any(|&u| {
             let q = self.c.position(u);
-            (p - q).length() > self.b.max_edge.max((x - q).length())
+            (p - q).length() > max_len.max((x - q).length())
         });
         if too_long {
             self.stats.bound_cancelled += 1;

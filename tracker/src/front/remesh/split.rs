@@ -1,8 +1,16 @@
 //! Edge splitting (paper 000 Appendix A.2, Fig. 25): every triangle on the edge, however many
-//! (non-manifold edges included), is cut in two at a new vertex on the edge, the children
-//! inheriting their parent's labels. The new vertex is the edge midpoint, so the surface does
-//! not move and no volume changes (the modified butterfly position is not used).
+//! (non-manifold edges included), is cut in two at a new vertex on the edge midpoint, the
+//! children inheriting their parent's labels, which moves no surface. With
+//! [`FrontParams::butterfly`](crate::front::params::FrontParams::butterfly), on a smooth
+//! regular patch the new vertex then moves to the butterfly subdivision point (Dyn, Levin &
+//! Gregory 1990), so refinement follows the curved surface instead of its facets; that move is
+//! checked like any other (bounds, CCD). Feature, non-manifold and irregular neighbourhoods
+//! keep the midpoint (paper 000 treats feature and non-manifold edges as boundaries of the
+//! scheme).
 
+use glam::DVec3;
+
+use super::features::Kind;
 use super::{starting_with, Remesher, Tri};
 
 impl Remesher<'_> {
@@ -28,8 +36,19 @@ impl Remesher<'_> {
             .collect();
         // Longest first; ties by index, so the order is deterministic.
         long.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
-        for (_, [a, b]) in long {
-            if self.try_split(a, b) {
+        // Butterfly points from the mesh as the round starts, as the subdivision scheme
+        // defines them: splitting one edge makes its neighbours' stencils irregular, but moves
+        // no surface, so the points stay the smooth surface's.
+        let smooth: Vec<Option<DVec3>> = long
+            .iter()
+            .map(|(_, [a, b])| {
+                self.butterfly
+                    .then(|| self.butterfly_point(*a, *b))
+                    .flatten()
+            })
+            .collect();
+        for ((_, [a, b]), smooth) in long.into_iter().zip(smooth) {
+            if self.try_split(a, b, smooth) {
                 self.stats.splits += 1;
                 done += 1;
                 self.verify_now("split");
@@ -38,9 +57,10 @@ impl Remesher<'_> {
         done
     }
 
-    /// Splits edge `(a, b)` at its midpoint if the bounds allow; `false` if cancelled or the
-    /// edge no longer exists.
-    pub(super) fn try_split(&mut self, a: u32, b: u32) -> bool {
+    /// Splits edge `(a, b)` at its midpoint if the bounds allow, then moves the new vertex to
+    /// `smooth` (its butterfly point) if that is allowed too; `false` if cancelled or the edge
+    /// no longer exists.
+    pub(super) fn try_split(&mut self, a: u32, b: u32, smooth: Option<DVec3>) -> bool {
         let mut tris = Vec::new();
         self.c.edge_triangles(a, b, &mut tris);
         if tris.is_empty() {
@@ -80,6 +100,70 @@ impl Remesher<'_> {
             self.add_triangle([u, m, w], labels);
             self.add_triangle([m, v, w], labels);
         }
+        if let Some(p) = smooth {
+            // Edges to the apexes may still be too long here (later rounds split them), and
+            // may lengthen by the butterfly offset; none may pass the parents' longest edge.
+            let longest = old
+                .iter()
+                .flat_map(|t| [(t.p[0], t.p[1]), (t.p[1], t.p[2]), (t.p[2], t.p[0])])
+                .map(|(x, y)| (x - y).length())
+                .fold(0.0, f64::max);
+            self.try_move(m, p, longest);
+        }
         true
     }
+
+    /// The butterfly point of edge `(a, b)`: ½(a + b) + ⅛(c + d) − 1/16 Σ wings, with `c`,
+    /// `d` the apexes of its two triangles and the wings the apexes across their four outer
+    /// edges. `None` unless the whole stencil is one smooth manifold patch between the same two
+    /// phases and `a`, `b` have valence 6 (the regular case, where the scheme is C¹).
+    fn butterfly_point(&self, a: u32, b: u32) -> Option<DVec3> {
+        let mut tris = Vec::with_capacity(2);
+        self.c.edge_triangles(a, b, &mut tris);
+        let [t1, t2] = tris[..] else {
+            return None;
+        };
+        let labels = sorted(self.c.labels(t1));
+        let regular = |v: u32| {
+            let f = self.vertex_features(v);
+            f.kind == Kind::Smooth && !f.non_manifold && self.c.neighbours(v).len() == 6
+        };
+        if sorted(self.c.labels(t2)) != labels || !regular(a) || !regular(b) {
+            return None;
+        }
+        let apex =
+            |t: u32, u: u32, v: u32| self.c.triangle(t).into_iter().find(|&x| x != u && x != v);
+        let (c, d) = (apex(t1, a, b)?, apex(t2, a, b)?);
+        // The triangle across outer edge (u, v) of triangle t, and its apex.
+        let wing = |t: u32, u: u32, v: u32| -> Option<u32> {
+            let mut across = Vec::with_capacity(2);
+            self.c.edge_triangles(u, v, &mut across);
+            let [s1, s2] = across[..] else {
+                return None;
+            };
+            let s = if s1 == t { s2 } else { s1 };
+            (sorted(self.c.labels(s)) == labels && !self.is_feature_edge(u, v))
+                .then(|| apex(s, u, v))
+                .flatten()
+        };
+        let wings = [
+            wing(t1, a, c)?,
+            wing(t1, b, c)?,
+            wing(t2, a, d)?,
+            wing(t2, b, d)?,
+        ];
+        let p = |v: u32| self.c.position(v);
+        let sum_wings: DVec3 = wings.iter().map(|&w| p(w)).sum();
+        let mid = 0.5 * (p(a) + p(b));
+        let point = mid + 0.125 * (p(c) + p(d)) - sum_wings / 16.0;
+        // On a surface resolved by its edges the offset is a sagitta, L²/8R; an offset above a
+        // tenth of the edge means a curvature radius near L (a sheet folding within a few
+        // edges), where the scheme overshoots: keep the midpoint there.
+        ((point - mid).length() <= 0.1 * (p(a) - p(b)).length()).then_some(point)
+    }
+}
+
+/// A label pair in ascending order, to compare sides regardless of orientation.
+fn sorted(l: [u16; 2]) -> [u16; 2] {
+    [l[0].min(l[1]), l[0].max(l[1])]
 }
