@@ -149,7 +149,20 @@ impl<'a> Detector<'a> {
     /// for each overlapping triangle it tests its own vertices against that triangle and, for
     /// higher-index triangles, its own edges against that triangle's own edges.
     pub fn detect(&self, x0: &[DVec3], x1: &[DVec3]) -> Vec<Contact> {
+        self.detect_among(x0, x1, None)
+    }
+
+    /// [`Detector::detect`] restricted to pairs with at least one vertex flagged in `changed`:
+    /// after a detection, pairs whose vertices all kept their end positions keep their
+    /// verdict, so collision response iterations need only re-test the pairs they touched.
+    pub fn detect_changed(&self, x0: &[DVec3], x1: &[DVec3], changed: &[bool]) -> Vec<Contact> {
+        self.detect_among(x0, x1, Some(changed))
+    }
+
+    fn detect_among(&self, x0: &[DVec3], x1: &[DVec3], changed: Option<&[bool]>) -> Vec<Contact> {
         let triangles = self.triangles;
+        let touched =
+            |t: u32| changed.is_none_or(|c| triangles[t as usize].iter().any(|&v| c[v as usize]));
         let boxes: Vec<(DVec3, DVec3)> = triangles
             .par_iter()
             .map(|t| swept_triangle_box(t, x0, x1))
@@ -184,8 +197,9 @@ impl<'a> Detector<'a> {
                 }
                 let (lo, hi) = grid.boxes()[t as usize];
                 grid.query(lo, hi, cand);
+                let t_touched = touched(t);
                 for &s in cand.iter() {
-                    if s == t {
+                    if s == t || !(t_touched || touched(s)) {
                         continue;
                     }
                     let other = triangles[s as usize];

@@ -115,21 +115,40 @@ pub fn resolve(
             repel(triangles, c, x0, x1, h);
         }
     }
+    // After the first full detection, each round re-tests only pairs touching a vertex that
+    // moved since the last detection or belonged to one of its contacts (every other pair
+    // was found free and has not changed).
+    let mut changed: Option<Vec<bool>> = None;
+    let redetect = |x1: &[DVec3], changed: &Option<Vec<bool>>| match changed {
+        None => detect(x1),
+        Some(c) => detector.detect_changed(x0, x1, c),
+    };
+    let mark = |before: &[DVec3], after: &[DVec3], contacts: &[Contact]| {
+        let mut c: Vec<bool> = before.iter().zip(after).map(|(p, q)| p != q).collect();
+        for contact in contacts {
+            for v in vertices_of(triangles, contact) {
+                c[v as usize] = true;
+            }
+        }
+        Some(c)
+    };
     for _ in 0..params.impulse_iterations {
-        let contacts = detect(x1);
+        let contacts = redetect(x1, &changed);
         stats.iterations += 1;
         if contacts.is_empty() {
             return Ok(stats);
         }
         stats.contacts += contacts.len();
+        let before = x1.to_vec();
         for c in &contacts {
             impulse(triangles, c, x0, x1, h);
         }
+        changed = mark(&before, x1, &contacts);
     }
     let proposed: Vec<DVec3> = (0..x0.len()).map(|i| x1[i] - x0[i]).collect();
     let mut zones = Zones::new(x0.len());
     for _ in 0..params.zone_iterations {
-        let contacts = detect(x1);
+        let contacts = redetect(x1, &changed);
         stats.iterations += 1;
         if contacts.is_empty() {
             stats.impact_zones = zones.count_nontrivial();
@@ -142,7 +161,9 @@ pub fn resolve(
                 zones.union(ids[0], v);
             }
         }
+        let before = x1.to_vec();
         zones.translate(x0, x1, &proposed);
+        changed = mark(&before, x1, &contacts);
     }
     let contacts = detect(x1);
     stats.iterations += 1;

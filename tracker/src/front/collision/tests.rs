@@ -164,3 +164,47 @@ fn bench_detect() {
         assert!(contacts.is_empty() && pairs.is_empty());
     }
 }
+
+#[test]
+fn detect_changed_finds_every_contact_of_changed_vertices() {
+    let m = two_spheres(0.02, 2);
+    let x0 = m.vertices.clone();
+    let mut rng = Rng(8);
+    let x1: Vec<DVec3> = x0
+        .iter()
+        .map(|&p| p + DVec3::new(if p.x < 0.0 { 0.05 } else { 0.0 }, 0.0, 0.0) + 0.003 * rng.v())
+        .collect();
+    // Change the end positions of every third vertex of the left sphere.
+    let mut x2 = x1.clone();
+    let mut changed = vec![false; x0.len()];
+    for i in (0..x0.len()).step_by(3).filter(|&i| x0[i].x < 0.0) {
+        x2[i] += DVec3::new(0.04, 0.0, 0.0);
+        changed[i] = true;
+    }
+    let detector = Detector::new(&m.triangles, x0.len());
+    let full = detector.detect(&x0, &x2);
+    let touched = |c: &Contact| {
+        let ids = match *c {
+            Contact::VertexTriangle { vertex, triangle } => {
+                let [a, b, c] = m.triangles[triangle as usize];
+                [vertex, a, b, c]
+            }
+            Contact::EdgeEdge { a, b } => [a[0], a[1], b[0], b[1]],
+        };
+        ids.iter().any(|&v| changed[v as usize])
+    };
+    // Every contact with a changed vertex is found again; whatever else comes back (pairs
+    // of untouched primitives on touched triangles) is a real contact too.
+    let expected: BTreeSet<Contact> = full.iter().copied().filter(|c| touched(c)).collect();
+    assert!(!expected.is_empty());
+    let found: BTreeSet<Contact> = detector
+        .detect_changed(&x0, &x2, &changed)
+        .into_iter()
+        .collect();
+    let all: BTreeSet<Contact> = full.into_iter().collect();
+    assert!(expected.is_subset(&found) && found.is_subset(&all));
+    // Nothing flagged: nothing to re-test.
+    assert!(detector
+        .detect_changed(&x0, &x2, &vec![false; x0.len()])
+        .is_empty());
+}
