@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use polyphase_scenes::{Scene, TrackerKind};
 use polyphase_tracker::front::front_tracker::FrontTracker;
-use polyphase_tracker::{metrics, ContourTracker, InterfaceTracker, LabeledMesh};
+use polyphase_tracker::{metrics, ContourTracker, InterfaceTracker};
 
 /// One tracker's run over the scene.
 struct Row {
@@ -127,24 +127,13 @@ fn measure<T: InterfaceTracker>(
         steps,
         start_triangles: initial.triangle_count(),
         max_triangles,
-        mean_edge: mean_edge(tracker.mesh()),
+        mean_edge: tracker.mesh().mean_edge_length(),
         step_s,
         stages,
         error_exact: worst(&reference),
         error_start: worst(&start_volumes),
         hausdorff_h: metrics::hausdorff(tracker.mesh(), &initial) / scene.grid.h,
     })
-}
-
-/// Mean length of the mesh's triangle edges.
-fn mean_edge(mesh: &LabeledMesh) -> f64 {
-    let sum: f64 = (0..mesh.triangle_count())
-        .map(|t| {
-            let [a, b, c] = mesh.corners(t);
-            (a - b).length() + (b - c).length() + (c - a).length()
-        })
-        .sum();
-    sum / (3 * mesh.triangle_count()).max(1) as f64
 }
 
 fn table(rows: &[Row]) -> String {

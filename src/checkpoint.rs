@@ -60,6 +60,26 @@ pub fn scene_hash(bytes: &[u8]) -> u64 {
     })
 }
 
+/// The contouring tracker a checkpoint saved (its mesh, tree and volume-correction state),
+/// rebuilt for the run's `scene`.
+pub fn restore_contour(
+    scene: &polyphase_scenes::Scene,
+    mesh: LabeledMesh,
+    tree: MdTree,
+    volume_targets: Option<Vec<f64>>,
+    carried_loss: Vec<f64>,
+) -> polyphase_tracker::ContourTracker {
+    polyphase_tracker::ContourTracker::from_parts(
+        scene.grid,
+        mesh,
+        tree,
+        scene.file.phases.len(),
+        scene.initial.background,
+        volume_targets,
+        carried_loss,
+    )
+}
+
 impl Checkpoint {
     /// The file's bytes.
     pub fn encode(&self) -> Result<Vec<u8>> {

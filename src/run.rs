@@ -118,6 +118,13 @@ pub enum Start {
     Resume(Box<Checkpoint>),
 }
 
+/// Where a frame loop starts: a new tracker (with the stats of building it), or after a
+/// checkpoint's frame.
+pub enum Progress {
+    Fresh(polyphase_tracker::StepStats),
+    After(usize),
+}
+
 /// A progress bar on stderr when it is a terminal, hidden otherwise.
 pub(crate) fn progress(total: usize) -> ProgressBar {
     let target = if std::io::stderr().is_terminal() {

@@ -14,9 +14,9 @@ use polyphase_scenes::Scene;
 use polyphase_tracker::{ContourTracker, InterfaceTracker, PhaseId, StepStats};
 use serde_json::{json, Value};
 
-use crate::checkpoint::{Checkpoint, Totals};
+use crate::checkpoint::{restore_contour, Checkpoint, Totals};
 use crate::output::RunFolder;
-use crate::run::{progress, Start};
+use crate::run::{progress, Progress, Start};
 use crate::summary::Summary;
 
 /// Runs a validated coupled scene into `root` (already checked to be writable by `folder`),
@@ -30,15 +30,7 @@ pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path, start: Start)
         }
         Start::Resume(c) => {
             let c = *c;
-            let tracker = ContourTracker::from_parts(
-                scene.grid,
-                c.mesh,
-                c.tree,
-                scene.file.phases.len(),
-                scene.initial.background,
-                c.volume_targets,
-                c.carried_loss,
-            );
+            let tracker = restore_contour(scene, c.mesh, c.tree, c.volume_targets, c.carried_loss);
             let mut sim = polyphase_coupling::with_tracker(scene, tracker)?;
             let solver = c
                 .solver
@@ -62,13 +54,6 @@ pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path, start: Start)
         })
     };
     simulate(scene, folder, root, sim, progress_at, prior, save)
-}
-
-/// Where the frame loop starts: a new simulation (with the stats of building its tracker),
-/// or after a checkpoint's frame.
-enum Progress {
-    Fresh(StepStats),
-    After(usize),
 }
 
 /// The frame loop: frames, grids, stats lines and (through `save`) checkpoints, then the

@@ -11,9 +11,9 @@ use polyphase_tracker::front::front_tracker::FrontTracker;
 use polyphase_tracker::{metrics, ContourTracker, InterfaceTracker, LabeledMesh, StepStats};
 use serde_json::{json, Value};
 
-use crate::checkpoint::{Checkpoint, Totals};
+use crate::checkpoint::{restore_contour, Checkpoint, Totals};
 use crate::output::RunFolder;
-use crate::run::{progress, Start};
+use crate::run::{progress, Progress, Start};
 use crate::summary::Summary;
 
 /// Runs (or resumes) a passive scene in `folder`.
@@ -47,7 +47,6 @@ fn first_contour(scene: &Scene) -> (ContourTracker, StepStats) {
 }
 
 fn run_contour(scene: &Scene, folder: &RunFolder, start: Start) -> Result<()> {
-    let n_phases = scene.file.phases.len();
     let steps = scene.steps_per_frame();
     let (tracker, hash, done, prior) = match start {
         Start::Fresh(hash) => {
@@ -56,15 +55,7 @@ fn run_contour(scene: &Scene, folder: &RunFolder, start: Start) -> Result<()> {
         }
         Start::Resume(c) => {
             let c = *c;
-            let tracker = ContourTracker::from_parts(
-                scene.grid,
-                c.mesh,
-                c.tree,
-                n_phases,
-                scene.initial.background,
-                c.volume_targets,
-                c.carried_loss,
-            );
+            let tracker = restore_contour(scene, c.mesh, c.tree, c.volume_targets, c.carried_loss);
             (tracker, c.scene_hash, Progress::After(c.frame), c.totals)
         }
     };
@@ -123,13 +114,6 @@ fn run_front(scene: &Scene, folder: &RunFolder) -> Result<()> {
         &initial_mesh,
         save,
     )
-}
-
-/// Where the frame loop starts: a new tracker (with the stats of building it), or after a
-/// checkpoint's frame.
-enum Progress {
-    Fresh(StepStats),
-    After(usize),
 }
 
 /// The frame loop: advances `tracker` through every remaining frame, writing the frame mesh,

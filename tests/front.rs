@@ -7,7 +7,7 @@ mod common;
 
 use std::fs;
 
-use common::{polyphase, run_small, scratch};
+use common::{builtin_at, polyphase, run_small, scratch};
 use glam::DVec3;
 use polyphase_scenes::{Scene, TrackerKind};
 use polyphase_tracker::front::front_tracker::FrontTracker;
@@ -23,14 +23,11 @@ struct Finished {
     tracker: FrontTracker,
 }
 
-/// Runs built-in `name` with the front tracker at `resolution` for `steps` steps (the whole
-/// scene when `None`), checking the invariants and intersection-freedom after every step.
-fn run(name: &str, resolution: i64, steps: Option<usize>) -> Finished {
-    let scene: Scene = polyphase_scenes::builtin(name)
-        .expect("built-in")
-        .expect("valid")
-        .with_overrides(Some(resolution), None)
-        .and_then(|s| s.with_tracker(TrackerKind::Front))
+/// Runs built-in `name` with the front tracker at `resolution` through the whole scene,
+/// checking the invariants and intersection-freedom after every step.
+fn run(name: &str, resolution: i64) -> Finished {
+    let scene = builtin_at(name, resolution)
+        .with_tracker(TrackerKind::Front)
         .expect("valid override");
     let sampler = |x| scene.initial.sample(x);
     let params = scene.file.tracker.front.clone().expect("resolved");
@@ -49,7 +46,7 @@ fn run(name: &str, resolution: i64, steps: Option<usize>) -> Finished {
     let per_frame = scene.steps_per_frame();
     let total = per_frame * scene.file.time.frames as usize;
     let dt = scene.frame_dt() / per_frame as f64;
-    for s in 0..steps.unwrap_or(total).min(total) {
+    for s in 0..total {
         tracker
             .advance(&scene.velocity, s as f64 * dt, dt)
             .unwrap_or_else(|e| panic!("{name} {resolution} step {s}: {e}"));
@@ -63,18 +60,6 @@ fn run(name: &str, resolution: i64, steps: Option<usize>) -> Finished {
         start_volumes,
         tracker,
     }
-}
-
-/// Mean length of the mesh's edges (each triangle's three; shared edges count twice, which
-/// does not bias a mean over a closed mesh).
-fn mean_edge(mesh: &LabeledMesh) -> f64 {
-    let sum: f64 = (0..mesh.triangle_count())
-        .map(|t| {
-            let [a, b, c] = mesh.corners(t);
-            (a - b).length() + (b - c).length() + (c - a).length()
-        })
-        .sum();
-    sum / (3 * mesh.triangle_count()) as f64
 }
 
 /// Points along the exact notch edges of `zalesak` (scenes/builtin/zalesak.toml): the two top
@@ -111,7 +96,7 @@ fn notch_error(mesh: &LabeledMesh) -> f64 {
 #[test]
 fn zalesak_full_turn_keeps_volumes_and_the_notch_edges() {
     for resolution in [32, 48] {
-        let f = run("zalesak", resolution, None);
+        let f = run("zalesak", resolution);
         let mesh = f.tracker.mesh();
         let end = f.tracker.phase_volumes();
         for (phase, (v, v0)) in end.iter().zip(&f.start_volumes).enumerate() {
@@ -127,7 +112,7 @@ fn zalesak_full_turn_keeps_volumes_and_the_notch_edges() {
         // Issue 6: the notch's edges end within 0.5 mean edge length of the exact shape.
         // The start mesh is contoured at h/2, so its edges are already off by up to ~0.4 L;
         // the turn itself must not round them further (measured: unchanged to 1e-4).
-        let l = mean_edge(mesh);
+        let l = mesh.mean_edge_length();
         let (start, end) = (notch_error(&f.initial), notch_error(mesh));
         assert!(
             end <= 0.5 * l,
@@ -143,7 +128,7 @@ fn zalesak_full_turn_keeps_volumes_and_the_notch_edges() {
 #[test]
 fn enright_stays_intersection_free_at_two_resolutions() {
     for resolution in [24, 32] {
-        let f = run("enright", resolution, None);
+        let f = run("enright", resolution);
         // The flow returns the ball at the end of the period. The front keeps it whole: its
         // shape is back within 2 h of the start (measured 1.2 h at 32³; the contouring tracker
         // strands debris tens of h away), though thin sheets lose a few percent of volume to

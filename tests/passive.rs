@@ -1,6 +1,8 @@
 //! Passive advection of the built-in scenes with the contouring tracker: mesh invariants after
 //! every step, and volume / shape recovery after a full period (paper 004 §7.2–7.3).
 
+mod common;
+
 use polyphase_scenes::Scene;
 use polyphase_tracker::{invariants, metrics, ContourTracker, InterfaceTracker, LabeledMesh};
 
@@ -15,12 +17,7 @@ struct Finished {
 /// Runs `name` at `resolution` for `steps` tracker steps (all of them when `None`), checking the
 /// shared mesh invariants after every step.
 fn run(name: &str, resolution: i64, steps: Option<usize>) -> Finished {
-    let scene: Scene = polyphase_scenes::builtin(name)
-        .expect("built-in")
-        .expect("valid")
-        .with_overrides(Some(resolution), None)
-        .expect("valid override");
-    run_scene(&scene, steps)
+    run_scene(&common::builtin_at(name, resolution), steps)
 }
 
 /// Runs a scene for `steps` tracker steps (all when `None`), checking invariants every step.

@@ -5,6 +5,15 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// Built-in scene `name` at tracker `resolution`.
+pub fn builtin_at(name: &str, resolution: i64) -> polyphase_scenes::Scene {
+    polyphase_scenes::builtin(name)
+        .expect("built-in")
+        .expect("valid")
+        .with_overrides(Some(resolution), None)
+        .expect("valid override")
+}
+
 /// Runs the `polyphase` binary with `args`.
 pub fn polyphase(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_polyphase"))

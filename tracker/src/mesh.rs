@@ -60,6 +60,18 @@ impl LabeledMesh {
         )
     }
 
+    /// Mean length of the triangles' edges (each triangle's three; on a closed mesh every edge
+    /// counts equally often, so this is the mean over edges); 0 for an empty mesh.
+    pub fn mean_edge_length(&self) -> f64 {
+        let sum: f64 = (0..self.triangle_count())
+            .map(|t| {
+                let [a, b, c] = self.corners(t);
+                (a - b).length() + (b - c).length() + (c - a).length()
+            })
+            .sum();
+        sum / (3 * self.triangle_count()).max(1) as f64
+    }
+
     /// Appends `other`'s vertices and triangles (indices shifted), keeping its labels; the
     /// result is the disjoint union of both surfaces.
     pub fn append(&mut self, other: &LabeledMesh) {

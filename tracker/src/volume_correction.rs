@@ -278,6 +278,22 @@ mod tests {
         }
     }
 
+    /// A contouring tracker of a ball of radius 0.25 (phase 1) at the centre of a 32³ unit
+    /// cube of phase 0, with its grid and the ball's centre.
+    fn ball_tracker() -> (ContourTracker, GridSpec, DVec3) {
+        let grid = GridSpec {
+            origin: DVec3::ZERO,
+            h: 1.0 / 32.0,
+            dims: [32, 32, 32],
+        };
+        let centre = DVec3::splat(0.5);
+        let ball = |x: DVec3| {
+            let d = (x - centre).length() - 0.25;
+            (d.abs(), if d < 0.0 { 1 } else { 0 })
+        };
+        (ContourTracker::new(grid, &ball, 2, 0).0, grid, centre)
+    }
+
     struct Still;
     impl VelocityField for Still {
         fn velocity(&self, _: DVec3, _: f64) -> DVec3 {
@@ -289,17 +305,7 @@ mod tests {
     /// target within a few steps, and stays a ball (every vertex near the target radius).
     #[test]
     fn tracker_grows_a_ball_to_its_target() {
-        let grid = GridSpec {
-            origin: DVec3::ZERO,
-            h: 1.0 / 32.0,
-            dims: [32, 32, 32],
-        };
-        let centre = DVec3::splat(0.5);
-        let ball = |x: DVec3| {
-            let d = (x - centre).length() - 0.25;
-            (d.abs(), if d < 0.0 { 1 } else { 0 })
-        };
-        let (mut tracker, _) = ContourTracker::new(grid, &ball, 2, 0);
+        let (mut tracker, grid, centre) = ball_tracker();
         let start = tracker.phase_volumes()[1];
         let target = start * 1.06;
         tracker.set_volume_targets(Some(vec![0.0, target]));
@@ -343,17 +349,7 @@ mod tests {
     /// forward, and the first step (nothing carried yet) retried, every step ends on the target.
     #[test]
     fn a_fixed_loss_per_step_is_given_back_within_the_step() {
-        let grid = GridSpec {
-            origin: DVec3::ZERO,
-            h: 1.0 / 32.0,
-            dims: [32, 32, 32],
-        };
-        let centre = DVec3::splat(0.5);
-        let ball = |x: DVec3| {
-            let d = (x - centre).length() - 0.25;
-            (d.abs(), if d < 0.0 { 1 } else { 0 })
-        };
-        let (mut tracker, _) = ContourTracker::new(grid, &ball, 2, 0);
+        let (mut tracker, _, centre) = ball_tracker();
         let target = tracker.volume_targets().expect("on by default")[1];
         let (dt, k): (f64, f64) = (1.0, 0.05 / 3.0);
         let loss = 1.0 - (-3.0 * k * dt).exp();
