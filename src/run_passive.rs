@@ -62,8 +62,9 @@ fn run_contour(scene: &Scene, folder: &RunFolder, start: Start) -> Result<()> {
     // The periodic error of the last frame compares with the first mesh (rebuilt exactly when
     // resuming: the initial build is deterministic).
     let initial_mesh = match done {
-        Progress::Fresh(_) => tracker.mesh().clone(),
-        Progress::After(_) => first_contour(scene).0.mesh().clone(),
+        _ if !scene.file.time.periodic => None,
+        Progress::Fresh(_) => Some(tracker.mesh().clone()),
+        Progress::After(_) => Some(first_contour(scene).0.mesh().clone()),
     };
     let save = |frame: usize, tracker: &ContourTracker, summary: &Summary, wall: f64| {
         folder.write_checkpoint(&Checkpoint {
@@ -83,7 +84,15 @@ fn run_contour(scene: &Scene, folder: &RunFolder, start: Start) -> Result<()> {
             },
         })
     };
-    track(scene, folder, tracker, done, prior, &initial_mesh, save)
+    track(
+        scene,
+        folder,
+        tracker,
+        done,
+        prior,
+        initial_mesh.as_ref(),
+        save,
+    )
 }
 
 fn run_front(scene: &Scene, folder: &RunFolder) -> Result<()> {
@@ -102,7 +111,7 @@ fn run_front(scene: &Scene, folder: &RunFolder) -> Result<()> {
         stages: vec![("build", started.elapsed().as_secs_f64())],
         ..StepStats::default()
     };
-    let initial_mesh = tracker.mesh().clone();
+    let initial_mesh = scene.file.time.periodic.then(|| tracker.mesh().clone());
     // Front runs keep no checkpoint: `resume` is for contouring runs.
     let save = |_: usize, _: &FrontTracker, _: &Summary, _: f64| Ok(());
     track(
@@ -111,7 +120,7 @@ fn run_front(scene: &Scene, folder: &RunFolder) -> Result<()> {
         tracker,
         Progress::Fresh(first),
         Totals::default(),
-        &initial_mesh,
+        initial_mesh.as_ref(),
         save,
     )
 }
@@ -124,7 +133,7 @@ fn track<T: InterfaceTracker>(
     mut tracker: T,
     progress_at: Progress,
     prior: Totals,
-    initial_mesh: &LabeledMesh,
+    initial_mesh: Option<&LabeledMesh>,
     save: impl Fn(usize, &T, &Summary, f64) -> Result<()>,
 ) -> Result<()> {
     let names = scene.phase_names();
@@ -167,7 +176,7 @@ fn track<T: InterfaceTracker>(
             .stages
             .push(("write", write_start.elapsed().as_secs_f64()));
         let mut line = frame_line(frame, time, steps, &stats, &tracker, &names);
-        if frame == frames && scene.file.time.periodic {
+        if let (true, Some(initial_mesh)) = (frame == frames, initial_mesh) {
             add_period_errors(&mut line, &tracker, initial_mesh, &reference, &names, scene);
         }
         folder.append_stats(&line)?;
