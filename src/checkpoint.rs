@@ -12,7 +12,7 @@ use polyphase_tracker::{ply, LabeledMesh, MdTree};
 pub const FILE: &str = "checkpoint.bin";
 
 const MAGIC: &[u8; 8] = b"PPHASECK";
-const VERSION: u32 = 2;
+const VERSION: u32 = 3;
 
 /// Running totals of a run (timings differ between runs; they only feed the summary).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -103,6 +103,9 @@ impl Checkpoint {
             put_f64(w, s.time);
             s.velocity.iter().for_each(|c| put_f64s(w, c));
             put_f64s(w, &s.pressure);
+            put_option(w, s.pure_faces.as_ref(), |w, o| {
+                o.iter().for_each(|c| put_u16s(w, c))
+            });
         });
         let t = &self.totals;
         put_f64(&mut w, t.wall);
@@ -153,6 +156,7 @@ impl Checkpoint {
                 time: r.f64()?,
                 velocity: [r.f64s()?, r.f64s()?, r.f64s()?],
                 pressure: r.f64s()?,
+                pure_faces: r.option(|r| Ok([r.u16s()?, r.u16s()?, r.u16s()?]))?,
             })
         })?;
         let wall = r.f64()?;
@@ -197,6 +201,12 @@ fn put_f64(w: &mut Vec<u8>, v: f64) {
 fn put_f64s(w: &mut Vec<u8>, v: &[f64]) {
     put_u64(w, v.len() as u64);
     v.iter().for_each(|&x| put_f64(w, x));
+}
+
+fn put_u16s(w: &mut Vec<u8>, v: &[u16]) {
+    put_u64(w, v.len() as u64);
+    v.iter()
+        .for_each(|&x| w.extend_from_slice(&x.to_le_bytes()));
 }
 
 fn put_option<T: ?Sized>(w: &mut Vec<u8>, v: Option<&T>, put: impl Fn(&mut Vec<u8>, &T)) {
@@ -247,6 +257,14 @@ impl<'a> Reader<'a> {
         (0..n).map(|_| self.f64()).collect()
     }
 
+    fn u16s(&mut self) -> Result<Vec<u16>> {
+        let n = self.usize()?;
+        ensure!(n <= self.rest.len() / 2, "truncated");
+        (0..n)
+            .map(|_| Ok(u16::from_le_bytes(self.array()?)))
+            .collect()
+    }
+
     fn option<T>(&mut self, read: impl FnOnce(&mut Self) -> Result<T>) -> Result<Option<T>> {
         match self.take(1)?[0] {
             0 => Ok(None),
@@ -289,6 +307,7 @@ mod tests {
                 time: 0.3000000000000001,
                 velocity: [vec![1e-300, -0.0], vec![f64::MIN_POSITIVE], vec![]],
                 pressure: vec![101325.0, 7.0 / 9.0],
+                pure_faces: Some([vec![1, 0], vec![65535], vec![]]),
             }),
             totals: Totals {
                 wall: 1.5,

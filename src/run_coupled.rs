@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use polyphase_coupling::{interface_extent, CoupledSim, FrameReport};
-use polyphase_grid::vdb::{encode, phase_field_grids, velocity_grid, Compression, VdbGrid};
+use polyphase_grid::vdb::{encode, phase_field_grids, Compression, VdbGrid};
 use polyphase_scenes::Scene;
 use polyphase_tracker::{ContourTracker, InterfaceTracker, PhaseId, StepStats};
 use serde_json::{json, Value};
@@ -165,7 +165,8 @@ fn simulate<T: InterfaceTracker>(
 }
 
 /// The frame's grids on the solver's cells, as one OpenVDB file: φ and χ as the solver reads
-/// them, the velocity at the cell centres ("v") and the pressure ("p").
+/// them, each cell's velocity in its own phase's field ("v", see `Solver::cell_velocities`) and the
+/// pressure ("p").
 fn grids<T: InterfaceTracker>(sim: &CoupledSim<T>) -> Result<Vec<u8>> {
     let solver = sim.solver();
     let grid = *solver.grid();
@@ -176,7 +177,12 @@ fn grids<T: InterfaceTracker>(sim: &CoupledSim<T>) -> Result<Vec<u8>> {
         *p = p.min(diagonal);
     }
     let mut out: Vec<VdbGrid> = phase_field_grids(&field).into();
-    out.push(velocity_grid(&grid, solver.velocity(), sim.time()));
+    let velocity = solver
+        .cell_velocities(&field, sim.phases())?
+        .iter()
+        .map(|v| v.as_vec3().to_array())
+        .collect();
+    out.push(VdbGrid::vector("v", velocity, [0.0; 3]));
     let pressure = solver.pressure().iter().map(|&p| p as f32).collect();
     out.push(VdbGrid::scalar("p", pressure, 0.0));
     Ok(encode(&grid, &out, Compression::Zip)?)

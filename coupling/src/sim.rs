@@ -62,6 +62,20 @@ impl FrameReport {
     }
 }
 
+impl Pending {
+    /// The time-averaged velocity of the pending steps.
+    fn average(&self) -> MacGrid {
+        let mut average = self.weighted.clone();
+        let inv = 1.0 / self.duration;
+        for a in 0..3 {
+            for w in average.component_mut(a) {
+                *w *= inv;
+            }
+        }
+        average
+    }
+}
+
 /// A solver and a tracker advancing together.
 pub struct CoupledSim<T: InterfaceTracker> {
     solver: Solver,
@@ -115,6 +129,11 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         &self.solver
     }
 
+    /// The phases' densities and viscosities.
+    pub fn phases(&self) -> &[PhaseProps] {
+        &self.phases
+    }
+
     /// The interface tracker.
     pub fn tracker(&self) -> &T {
         &self.tracker
@@ -156,16 +175,30 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         report: &mut FrameReport,
     ) -> Result<(), CouplingError> {
         let t0 = Instant::now();
-        let mut field = self.tracker.sample(self.solver.grid());
+        let grid = *self.solver.grid();
+        let mut field = match &self.pending {
+            Some(p) => {
+                let average = p.average();
+                self.tracker
+                    .sample_advected(&grid, &average, p.start, p.duration)
+            }
+            None => self.tracker.sample(&grid),
+        };
         // φ = ∞ means "no interface anywhere" (every other phase gone); any distance beyond
         // the domain diagonal says the same to the solver, which needs finite values.
-        let far = self.solver.grid().h * self.solver.grid().dims.iter().sum::<usize>() as f64;
+        let far = grid.h * grid.dims.iter().sum::<usize>() as f64;
         for p in &mut field.phi {
             if *p == f64::INFINITY {
                 *p = far;
             }
         }
         report.add("sample", t0.elapsed().as_secs_f64());
+        // The tracker's velocity reaches as far past each interface as the fluid may travel
+        // before the tracker catches up, plus the interpolation stencil.
+        let band = (self.control.tracker_travel / grid.h).ceil().min(250.0) as u8 + 2;
+        let t1 = Instant::now();
+        let before = self.solver.interface_velocity(&field, &self.phases, band)?;
+        let mut interface_secs = t1.elapsed().as_secs_f64();
         let solved = self.solver.step(&field, &self.phases, dt)?;
         report.add("advect_velocity", solved.timings.advection);
         report.add("forces", solved.timings.forces);
@@ -173,7 +206,22 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         report.add("pressure", solved.timings.pressure);
         report.pressure_iterations += solved.pressure.iterations;
         report.viscosity_iterations += solved.viscosity.map_or(0, |v| v.iterations);
-        let velocity = self.solver.velocity();
+        let t2 = Instant::now();
+        let after = self.solver.interface_velocity(&field, &self.phases, band)?;
+        // The interfaces move over the step with the mean of its start and end velocities
+        // (trapezoidal rule): the end velocity alone runs a falling drop ahead by g·t·dt/2.
+        let mut velocity = after;
+        for a in 0..3 {
+            for (u, b) in velocity
+                .component_mut(a)
+                .iter_mut()
+                .zip(before.component(a))
+            {
+                *u = 0.5 * (*u + b);
+            }
+        }
+        interface_secs += t2.elapsed().as_secs_f64();
+        report.add("interface_velocity", interface_secs);
         let speed = velocity.max_abs();
         let pending = self.pending.get_or_insert_with(|| {
             let mut zero = velocity.clone();
@@ -210,18 +258,13 @@ impl<T: InterfaceTracker> CoupledSim<T> {
     /// Advances the tracker over the pending solver steps in their time-averaged velocity
     /// (divergence-free, as every step's velocity is).
     fn flush(&mut self, report: &mut FrameReport) -> Result<(), CouplingError> {
-        let Some(mut pending) = self.pending.take() else {
+        let Some(pending) = self.pending.take() else {
             return Ok(());
         };
-        let inv = 1.0 / pending.duration;
-        for a in 0..3 {
-            for w in pending.weighted.component_mut(a) {
-                *w *= inv;
-            }
-        }
-        let tracked: StepStats =
-            self.tracker
-                .advance(&pending.weighted, pending.start, pending.duration)?;
+        let average = pending.average();
+        let tracked: StepStats = self
+            .tracker
+            .advance(&average, pending.start, pending.duration)?;
         for &(name, secs) in &tracked.stages {
             report.add(name, secs);
         }

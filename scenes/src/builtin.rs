@@ -25,6 +25,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "rayleigh_taylor",
         include_str!("../builtin/rayleigh_taylor.toml"),
     ),
+    ("fall", include_str!("../builtin/fall.toml")),
     ("balls", include_str!("../builtin/balls.toml")),
     ("pool", include_str!("../builtin/pool.toml")),
     ("viscous", include_str!("../builtin/viscous.toml")),

@@ -11,6 +11,7 @@ mod advect;
 pub mod bench;
 mod config;
 mod error;
+mod extension;
 mod interp;
 mod layout;
 mod linalg;

@@ -2,10 +2,11 @@
 //! one step at a time (DESIGN.md "The solver"): advect, body forces, implicit viscosity,
 //! variable-density projection. A failed step leaves the state untouched.
 
-use crate::advect::advect;
+use crate::advect::advect_by_phase;
 use crate::config::{AxisBoundary, SolverConfig};
 use crate::error::SolverError;
-use crate::layout::{unidx, Layout};
+use crate::extension::{all_face_owners, all_pure_faces, extend, owning_phases, MIXED, UNREACHED};
+use crate::layout::{idx, unidx, Layout};
 use crate::linalg::pcg::SolveStats;
 use crate::linalg::vecops::first_non_finite;
 use crate::mac::MacGrid;
@@ -13,7 +14,7 @@ use crate::phase::{cell_material, face_densities, PhaseProps};
 use crate::solid::open_fractions;
 use crate::{pressure, viscosity};
 use glam::DVec3;
-use polyphase_grid::{GridSpec, PhaseField};
+use polyphase_grid::{GridSpec, PhaseField, PhaseId};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -58,6 +59,10 @@ pub struct SolverState {
     pub velocity: [Vec<f64>; 3],
     /// Cell-centre pressure of the last projection.
     pub pressure: Vec<f64>,
+    /// The phase each face's velocity belongs to, per component: the faces whose cells were
+    /// all of one phase in the last step (`PhaseId::MAX` where the interface passed between
+    /// them); `None` before the first step.
+    pub pure_faces: Option<[Vec<PhaseId>; 3]>,
 }
 
 /// The MAC-grid multiphase solver.
@@ -67,6 +72,7 @@ pub struct Solver {
     velocity: MacGrid,
     open: [Vec<f64>; 3],
     pressure: Vec<f64>,
+    pure_faces: Option<[Vec<PhaseId>; 3]>,
     time: f64,
 }
 
@@ -86,6 +92,7 @@ impl Solver {
             velocity,
             open,
             pressure,
+            pure_faces: None,
             time: 0.0,
         })
     }
@@ -126,6 +133,7 @@ impl Solver {
             time: self.time,
             velocity: self.velocity.comps.clone(),
             pressure: self.pressure.clone(),
+            pure_faces: self.pure_faces.clone(),
         }
     }
 
@@ -135,7 +143,11 @@ impl Solver {
         let sizes = |v: &[Vec<f64>; 3], p: &[f64]| [v[0].len(), v[1].len(), v[2].len(), p.len()];
         let expected = sizes(&self.velocity.comps, &self.pressure);
         let found = sizes(&state.velocity, &state.pressure);
-        if expected != found {
+        let owners_fit = state
+            .pure_faces
+            .as_ref()
+            .is_none_or(|o| (0..3).all(|a| o[a].len() == self.velocity.comps[a].len()));
+        if expected != found || !owners_fit {
             return Err(SolverError::GridMismatch {
                 expected: format!("u, v, w, p sizes {expected:?}"),
                 found: format!("{found:?}"),
@@ -144,6 +156,7 @@ impl Solver {
         self.time = state.time;
         self.velocity.comps = state.velocity;
         self.pressure = state.pressure;
+        self.pure_faces = state.pure_faces;
         Ok(())
     }
 
@@ -168,6 +181,92 @@ impl Solver {
         } else {
             f64::INFINITY
         }
+    }
+
+    /// The velocity the interfaces move with: on each face, the velocity of the densest phase
+    /// within `band` faces of it (continued across its interfaces, see `extension.rs`),
+    /// unless the face purely belongs to a phase at least as dense. A liquid's surface then
+    /// moves with the liquid alone: the normal velocity is continuous across an interface
+    /// anyway, and the light phase's tangential slip, which interpolation would otherwise
+    /// blend into the surface's motion, is left out. Each face's phase is the one its
+    /// velocity was computed for (the last step's); `field` gives them before the first step.
+    pub fn interface_velocity(
+        &self,
+        field: &PhaseField,
+        phases: &[PhaseProps],
+        band: u8,
+    ) -> Result<MacGrid, SolverError> {
+        let seeds = self.face_phases(field, phases)?;
+        let density = |p: PhaseId| phases[usize::from(p)].density;
+        let mut order = owning_phases(&seeds, &self.open);
+        order.sort_by(|&a, &b| density(a).total_cmp(&density(b)).then(a.cmp(&b)));
+        let mut out = self.velocity.clone();
+        for &phase in &order {
+            let ext = extend(&self.velocity, &self.open, &seeds, phase, band);
+            let parts = ext.field.comps.iter().zip(&ext.layer).zip(&seeds);
+            for (comp, ((values, layers), own)) in out.comps.iter_mut().zip(parts) {
+                comp.par_iter_mut()
+                    .zip(values)
+                    .zip(layers)
+                    .zip(own)
+                    .for_each(|(((o, &v), &layer), &own)| {
+                        let lighter = own == MIXED || density(own) < density(phase);
+                        if layer != 0 && layer != UNREACHED && lighter {
+                            *o = v;
+                        }
+                    });
+            }
+        }
+        Ok(out)
+    }
+
+    /// The phase each face's current velocity belongs to (see [`SolverState::pure_faces`]),
+    /// from `field` before the first step.
+    fn face_phases(
+        &self,
+        field: &PhaseField,
+        phases: &[PhaseProps],
+    ) -> Result<[Vec<PhaseId>; 3], SolverError> {
+        let material = cell_material(field, phases)?;
+        Ok(match &self.pure_faces {
+            Some(p) => p.clone(),
+            None => all_pure_faces(&material, &self.velocity.layout),
+        })
+    }
+
+    /// Velocity at each cell centre (cell order, x fastest) in the field of the cell's own
+    /// phase χ from `field`: the mean of the cell's two faces per axis, each phase's velocity
+    /// continued two faces across its interfaces. A cell the interface has just swept over
+    /// still has faces holding the other phase's velocity; this reads its own phase's instead
+    /// (for output grids).
+    pub fn cell_velocities(
+        &self,
+        field: &PhaseField,
+        phases: &[PhaseProps],
+    ) -> Result<Vec<DVec3>, SolverError> {
+        let layout = self.velocity.layout;
+        let owners = self.face_phases(field, phases)?;
+        let mut present: Vec<PhaseId> = field.chi.clone();
+        present.sort_unstable();
+        present.dedup();
+        let mut out = vec![DVec3::ZERO; layout.cells()];
+        for phase in present {
+            let ext = extend(&self.velocity, &self.open, &owners, phase, 2);
+            out.par_iter_mut().enumerate().for_each(|(c, v)| {
+                if field.chi[c] != phase {
+                    return;
+                }
+                let p = unidx(layout.n, c);
+                for a in 0..3 {
+                    let dims = layout.face_dims(a);
+                    let mut q = p;
+                    q[a] = layout.node_above(a, p[a]);
+                    let comp = &ext.field.comps[a];
+                    v[a] = 0.5 * (comp[idx(dims, p)] + comp[idx(dims, q)]);
+                }
+            });
+        }
+        Ok(out)
     }
 
     /// Advances by `dt` with gravity only.
@@ -251,7 +350,10 @@ impl Solver {
                 }
             });
         }
-        let mut vel = advect(&start, open, dt, self.config.advection);
+        let owners = all_face_owners(&material, &start.layout);
+        let pure = all_pure_faces(&material, &start.layout);
+        let before = self.pure_faces.as_ref().unwrap_or(&pure);
+        let mut vel = advect_by_phase(&start, open, before, &owners, dt, self.config.advection);
         timings.advection = t0.elapsed().as_secs_f64();
 
         let t1 = Instant::now();
@@ -306,6 +408,7 @@ impl Solver {
         }
         self.velocity = vel;
         self.pressure = projected.pressure;
+        self.pure_faces = Some(pure);
         self.time += dt;
         Ok(StepReport {
             pressure: projected.stats,

@@ -6,11 +6,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use glam::DVec3;
-use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField};
+use polyphase_grid::{GridSpec, PhaseId, VelocityField};
 
 use crate::contour::{MdTree, PhaseSampler};
 use crate::mesh::LabeledMesh;
 use crate::query::MeshQuery;
+use crate::tracker::departure_point;
 use crate::tracker::{InterfaceTracker, StepStats, TrackerError};
 use crate::volume_correction::{carried_loss, first_aim, missed, reaim, VolumeShift, MAX_RETRIES};
 
@@ -147,17 +148,6 @@ fn rebuild(
     (tree, mesh, query, stats)
 }
 
-/// Departure point of the trajectory that reaches `x` at `t + dt` (classical RK4 backwards in
-/// time; the analytic test flows are smooth, so the fourth-order error is far below h).
-fn backtrace(v: &dyn VelocityField, x: DVec3, t: f64, dt: f64) -> DVec3 {
-    let t1 = t + dt;
-    let k1 = v.velocity(x, t1);
-    let k2 = v.velocity(x - 0.5 * dt * k1, t1 - 0.5 * dt);
-    let k3 = v.velocity(x - 0.5 * dt * k2, t1 - 0.5 * dt);
-    let k4 = v.velocity(x - dt * k3, t);
-    x - dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-}
-
 /// Backtrace, then the exact query on the previous mesh (§3, §4).
 struct Departure<'a> {
     previous: &'a MeshQuery,
@@ -173,7 +163,7 @@ struct Departure<'a> {
 
 impl PhaseSampler for Departure<'_> {
     fn sample(&self, x: DVec3) -> (f64, PhaseId) {
-        let x0 = backtrace(self.velocity, x, self.t, self.dt);
+        let x0 = departure_point(self.velocity, x, self.t, self.dt);
         if !x0.is_finite() {
             self.bad.store(true, Ordering::Relaxed);
             return (0.0, 0);
@@ -256,8 +246,8 @@ impl InterfaceTracker for ContourTracker {
         Ok(stats)
     }
 
-    fn sample(&self, grid: &GridSpec) -> PhaseField {
-        PhaseField::from_cell_centres(grid, |x| self.phi_chi(x))
+    fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
+        ContourTracker::phi_chi(self, x)
     }
 
     fn mesh(&self) -> &LabeledMesh {
@@ -275,5 +265,5 @@ fn first_non_finite(v: &dyn VelocityField, grid: &GridSpec, t: f64, dt: f64) -> 
     (0..=nz)
         .flat_map(|k| (0..=ny).flat_map(move |j| (0..=nx).map(move |i| (i, j, k))))
         .map(|(i, j, k)| grid.node(i, j, k))
-        .find(|&x| !backtrace(v, x, t, dt).is_finite())
+        .find(|&x| !departure_point(v, x, t, dt).is_finite())
 }

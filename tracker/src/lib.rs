@@ -21,4 +21,4 @@ pub use mesh::LabeledMesh;
 pub use ply::{read_ply, write_ply, PlyError};
 pub use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField, OUTSIDE};
 pub use query::{MeshQuery, Nearest};
-pub use tracker::{InterfaceTracker, StepStats, TrackerError};
+pub use tracker::{departure_point, InterfaceTracker, StepStats, TrackerError};

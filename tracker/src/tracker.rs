@@ -1,7 +1,8 @@
 //! The interface every tracker implements (DESIGN.md "InterfaceTracker"), so each scene can
 //! choose its tracker and every tracker test can run on all of them.
 
-use polyphase_grid::{GridSpec, PhaseField, VelocityField};
+use glam::DVec3;
+use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField};
 use thiserror::Error;
 
 use crate::mesh::LabeledMesh;
@@ -26,7 +27,7 @@ pub enum TrackerError {
 }
 
 /// A multiphase interface tracker: advances in a velocity field and answers φ, χ.
-pub trait InterfaceTracker: Send {
+pub trait InterfaceTracker: Send + Sync {
     /// Moves the interfaces from time `t` to `t + dt`.
     fn advance(
         &mut self,
@@ -34,10 +35,39 @@ pub trait InterfaceTracker: Send {
         t: f64,
         dt: f64,
     ) -> Result<StepStats, TrackerError>;
-    /// φ (unsigned distance) and χ (phase) at the cell centres of `grid`.
-    fn sample(&self, grid: &GridSpec) -> PhaseField;
+    /// Exact φ (unsigned distance) and χ (phase) of the current interface at `x`.
+    fn phi_chi(&self, x: DVec3) -> (f64, PhaseId);
+    /// φ and χ at the cell centres of `grid`.
+    fn sample(&self, grid: &GridSpec) -> PhaseField {
+        PhaseField::from_cell_centres(grid, |x| self.phi_chi(x))
+    }
+    /// φ and χ at the cell centres of `grid` of the interface as `velocity` would carry it
+    /// from `t` to `t + dt`, without advancing: each centre is traced back to its departure
+    /// point ([`departure_point`]) and the current interface is read there (the
+    /// semi-Lagrangian step of paper 004 §3, less the resampling). A coupled run hands this
+    /// to the solver between tracker steps, so the solver always sees today's interface.
+    fn sample_advected(
+        &self,
+        grid: &GridSpec,
+        velocity: &dyn VelocityField,
+        t: f64,
+        dt: f64,
+    ) -> PhaseField {
+        PhaseField::from_cell_centres(grid, |x| self.phi_chi(departure_point(velocity, x, t, dt)))
+    }
     /// The current interface mesh, closed at the domain boundary.
     fn mesh(&self) -> &LabeledMesh;
     /// Volume of each phase enclosed by the current mesh.
     fn phase_volumes(&self) -> Vec<f64>;
+}
+
+/// Departure point of the trajectory that reaches `x` at `t + dt` (classical RK4 backwards in
+/// time; the analytic test flows are smooth, so the fourth-order error is far below h).
+pub fn departure_point(v: &dyn VelocityField, x: DVec3, t: f64, dt: f64) -> DVec3 {
+    let t1 = t + dt;
+    let k1 = v.velocity(x, t1);
+    let k2 = v.velocity(x - 0.5 * dt * k1, t1 - 0.5 * dt);
+    let k3 = v.velocity(x - 0.5 * dt * k2, t1 - 0.5 * dt);
+    let k4 = v.velocity(x - dt * k3, t);
+    x - dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 }

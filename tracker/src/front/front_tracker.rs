@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::DVec3;
-use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField, OUTSIDE};
+use polyphase_grid::{GridSpec, PhaseId, VelocityField, OUTSIDE};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -304,14 +304,12 @@ impl InterfaceTracker for FrontTracker {
         })
     }
 
-    fn sample(&self, grid: &GridSpec) -> PhaseField {
-        let query = self
+    fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
+        let n = self
             .query
-            .get_or_init(|| MeshQuery::new(&self.c.mesh, self.background));
-        PhaseField::from_cell_centres(grid, |x| {
-            let n = query.query(x);
-            (n.distance, n.phase)
-        })
+            .get_or_init(|| MeshQuery::new(&self.c.mesh, self.background))
+            .query(x);
+        (n.distance, n.phase)
     }
 
     fn mesh(&self) -> &LabeledMesh {
