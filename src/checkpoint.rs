@@ -103,7 +103,10 @@ impl Checkpoint {
             put_f64(w, s.time);
             s.velocity.iter().for_each(|c| put_f64s(w, c));
             put_f64s(w, &s.pressure);
-            put_option(w, s.pure_faces.as_ref(), |w, o| {
+            put_option(w, s.owners.as_ref(), |w, o| {
+                o.iter().for_each(|c| put_u16s(w, c))
+            });
+            put_option(w, s.seed_phases.as_ref(), |w, o| {
                 o.iter().for_each(|c| put_u16s(w, c))
             });
         });
@@ -156,7 +159,8 @@ impl Checkpoint {
                 time: r.f64()?,
                 velocity: [r.f64s()?, r.f64s()?, r.f64s()?],
                 pressure: r.f64s()?,
-                pure_faces: r.option(|r| Ok([r.u16s()?, r.u16s()?, r.u16s()?]))?,
+                owners: r.option(|r| Ok([r.u16s()?, r.u16s()?, r.u16s()?]))?,
+                seed_phases: r.option(|r| Ok([r.u16s()?, r.u16s()?, r.u16s()?]))?,
             })
         })?;
         let wall = r.f64()?;
@@ -307,7 +311,8 @@ mod tests {
                 time: 0.3000000000000001,
                 velocity: [vec![1e-300, -0.0], vec![f64::MIN_POSITIVE], vec![]],
                 pressure: vec![101325.0, 7.0 / 9.0],
-                pure_faces: Some([vec![1, 0], vec![65535], vec![]]),
+                owners: Some([vec![0, 1], vec![2], vec![]]),
+                seed_phases: Some([vec![1, 65535, 0, 2], vec![65535, 65535], vec![]]),
             }),
             totals: Totals {
                 wall: 1.5,

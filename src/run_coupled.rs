@@ -219,6 +219,7 @@ fn frame_line<T: InterfaceTracker>(
         "mesh": { "vertices": mesh.vertices.len(), "triangles": mesh.triangles.len() },
         "cells": report.cells,
         "interface_cells": report.interface_cells,
+        "interface_lag": report.interface_lag,
     });
     add_diagnostics(&mut line, scene, tracker);
     line

@@ -11,4 +11,4 @@ pub mod sim;
 pub use diagnostics::interface_extent;
 pub use error::CouplingError;
 pub use setup::{from_scene, with_tracker};
-pub use sim::{CoupledSim, FrameReport, TimeControl};
+pub use sim::{interface_lag, CoupledSim, FrameReport, TimeControl};

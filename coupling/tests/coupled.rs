@@ -42,12 +42,18 @@ fn fitted_rate(ratio: f64, t: f64, nu_k2: f64) -> f64 {
 }
 
 /// Runs the built-in Rayleigh–Taylor slab in its linear regime (amplitude 0.005 = 0.03/k,
-/// 32 solver cells per wavelength, tracker advanced every solver step) to t = 1.2 s and
-/// returns (measured, theoretical) growth rates.
-fn rayleigh_taylor_rate(nu: f64) -> (f64, f64) {
+/// 32 solver cells per wavelength) to t = 1.2 s and returns (measured, theoretical) growth
+/// rates; `every_step` advances the tracker every solver step, else at the default
+/// `time.cfl`.
+fn rayleigh_taylor_rate(nu: f64, every_step: bool) -> (f64, f64) {
+    let frames = if every_step {
+        "frames = 1\ncfl = 0.001"
+    } else {
+        "frames = 1"
+    };
     let text = builtin_text("rayleigh_taylor")
         .replace("end = 3.0", "end = 1.2")
-        .replace("frames = 30", "frames = 1\ncfl = 0.001")
+        .replace("frames = 30", frames)
         .replace("amplitude = -0.05", "amplitude = -0.005")
         .replace("viscosity = 3.0e-3", &format!("viscosity = {nu}"))
         .replace("viscosity = 9.0e-3", &format!("viscosity = {}", 3.0 * nu))
@@ -70,7 +76,7 @@ fn rayleigh_taylor_growth_matches_viscous_linear_theory() {
     // −8.6 % at this resolution (−7.6 % … −9.9 % from 32 to 64 cells per wavelength), the
     // remainder being the first-order sharp-interface discretisation and the approximate
     // equal-ν theory. Runs are bit-deterministic, so the margin does not flake.
-    let (rate, theory) = rayleigh_taylor_rate(0.01);
+    let (rate, theory) = rayleigh_taylor_rate(0.01, true);
     assert!(
         (rate - theory).abs() < 0.10 * theory,
         "viscous growth rate {rate} vs theory {theory}"
@@ -80,10 +86,23 @@ fn rayleigh_taylor_growth_matches_viscous_linear_theory() {
 #[test]
 fn rayleigh_taylor_growth_matches_inviscid_linear_theory() {
     // Exact inviscid linear theory (tanh(kH) = tanh 2π ≈ 1 for these depths); measured −2.6 %.
-    let (rate, theory) = rayleigh_taylor_rate(0.0);
+    let (rate, theory) = rayleigh_taylor_rate(0.0, true);
     assert!(
         (rate - theory).abs() < 0.10 * theory,
         "inviscid growth rate {rate} vs theory {theory}"
+    );
+}
+
+#[test]
+fn rayleigh_taylor_growth_at_the_default_tracker_cfl() {
+    // The tracker advances every 8 of its cells of travel and the solver samples its mesh
+    // advected to every step. Measured −9.9 % against viscous linear theory (−8.6 % with a
+    // tracker step per solver step): the 5 % is NOT met yet (README, known gaps);
+    // this guards the measured figure with the 10 % of the every-step test above plus 2 %.
+    let (rate, theory) = rayleigh_taylor_rate(0.01, false);
+    assert!(
+        (rate - theory).abs() < 0.12 * theory,
+        "viscous growth rate {rate} vs theory {theory} at the default cfl"
     );
 }
 

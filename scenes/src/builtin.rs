@@ -27,6 +27,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ),
     ("fall", include_str!("../builtin/fall.toml")),
     ("balls", include_str!("../builtin/balls.toml")),
+    ("drop_pool", include_str!("../builtin/drop_pool.toml")),
     ("pool", include_str!("../builtin/pool.toml")),
     ("viscous", include_str!("../builtin/viscous.toml")),
 ];

@@ -5,7 +5,7 @@
 //! [`crate::extension`]), so no stencil mixes two phases' momentum.
 
 use crate::config::AdvectionScheme;
-use crate::extension::{extend, owning_phases};
+use crate::extension::{carries, extend, owning_phases};
 use crate::interp;
 use crate::layout::unidx;
 use crate::mac::MacGrid;
@@ -106,10 +106,10 @@ pub(crate) fn advect(
 /// Advects the velocity over `dt` with every face in its owner's field: each phase's velocity
 /// is continued across its interfaces far enough that no departure stencil of its own faces
 /// (nor of the MacCormack back-trace) leaves it, advected, and kept on its own faces.
-/// `before` says which phase each face's current value belongs to (the pure faces of the
-/// step that computed it): a face the interface has just swept over still holds the other
-/// phase's velocity, so each phase's field grows from the faces it purely held before, and
-/// `owners` (now) says which phase's result each face keeps.
+/// `before` says which phases each face's current value belongs to (the seed pairs of the
+/// step that computed it, see `extension::seed_phases`): a face the interface has just swept
+/// over still holds the other phase's velocity, so each phase's field grows from the faces
+/// that carried it before, and `owners` (now) says which phase's result each face keeps.
 pub(crate) fn advect_by_phase(
     vel: &MacGrid,
     open: &[Vec<f64>; 3],
@@ -133,7 +133,7 @@ pub(crate) fn advect_by_phase(
         c.fill(0.0);
     }
     for phase in phases {
-        let ext = extend(vel, open, before, phase, rings);
+        let ext = extend(vel, open, &|a, f| carries(&before[a], f, phase), rings);
         let advected = advect_where(
             &ext.field,
             open,

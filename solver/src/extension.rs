@@ -11,7 +11,7 @@
 
 use crate::layout::{idx, unidx, Layout};
 use crate::mac::MacGrid;
-use crate::phase::CellMaterial;
+use crate::phase::{face_density, CellMaterial};
 use polyphase_grid::PhaseId;
 use rayon::prelude::*;
 
@@ -37,8 +37,8 @@ pub(crate) fn face_owners(m: &CellMaterial, layout: &Layout, a: usize) -> Vec<Ph
             match (layout.cell_below(a, p[a]), layout.cell_above_node(a, p[a])) {
                 (Some(lo), Some(hi)) => {
                     let (lo, hi) = (cell(lo), cell(hi));
-                    if m.chi[lo] == m.chi[hi] {
-                        return m.chi[lo];
+                    if m.group[lo] == m.group[hi] {
+                        return m.group[lo];
                     }
                     let s = m.phi[lo] + m.phi[hi];
                     let theta = if s > 0.0 {
@@ -47,14 +47,14 @@ pub(crate) fn face_owners(m: &CellMaterial, layout: &Layout, a: usize) -> Vec<Ph
                         0.5
                     };
                     if theta * m.rho[lo] >= (1.0 - theta) * m.rho[hi] {
-                        m.chi[lo]
+                        m.group[lo]
                     } else {
-                        m.chi[hi]
+                        m.group[hi]
                     }
                 }
-                (Some(lo), None) => m.chi[cell(lo)],
-                (None, Some(hi)) => m.chi[cell(hi)],
-                (None, None) => m.chi[cell(0)],
+                (Some(lo), None) => m.group[cell(lo)],
+                (None, Some(hi)) => m.group[cell(hi)],
+                (None, None) => m.group[cell(0)],
             }
         })
         .collect()
@@ -65,45 +65,71 @@ pub(crate) fn all_face_owners(m: &CellMaterial, layout: &Layout) -> [Vec<PhaseId
     [0, 1, 2].map(|a| face_owners(m, layout, a))
 }
 
-/// Marks a face whose two cells hold different phases in [`pure_faces`].
+/// "No phase" in the seed pairs of [`seed_phases`].
 pub(crate) const MIXED: PhaseId = PhaseId::MAX;
 
-/// The phase of each face of component `a` whose cells (one at a wall) are all of that phase,
-/// [`MIXED`] where the interface passes between them. Only pure faces seed a phase's
-/// extension: the projection moves a face the interface crosses with a blend of both phases'
-/// inertia (ρ_face), so its value belongs to neither.
-pub(crate) fn pure_faces(m: &CellMaterial, layout: &Layout, a: usize) -> Vec<PhaseId> {
+/// For each face of component `a`, the (up to two) phases whose velocity it carries,
+/// interleaved as pairs: a face between two cells of one phase carries that phase's; a face
+/// the interface crosses carries a phase's only where its inertia ρ_face (the ghost-fluid
+/// blend of [`crate::phase`]) is at least half that phase's density. A lighter face is moved
+/// by the other phase's pressure in the projection, so its value belongs to neither; a face
+/// between two liquids of similar density carries both. Only these seed a phase's
+/// extension. Faces at a wall carry their one cell's phase.
+pub(crate) fn seed_phases(m: &CellMaterial, layout: &Layout, a: usize) -> Vec<PhaseId> {
     let fd = layout.face_dims(a);
     (0..fd[0] * fd[1] * fd[2])
         .into_par_iter()
-        .map(|f| {
+        .flat_map_iter(|f| {
             let p = unidx(fd, f);
             let cell = |i: usize| {
                 let mut q = p;
                 q[a] = i;
-                m.chi[idx(layout.n, q)]
+                idx(layout.n, q)
             };
-            match (layout.cell_below(a, p[a]), layout.cell_above_node(a, p[a])) {
-                (Some(lo), Some(hi)) if cell(lo) != cell(hi) => MIXED,
-                (Some(lo), _) => cell(lo),
-                (None, Some(hi)) => cell(hi),
-                (None, None) => cell(0),
-            }
+            let pair = match (layout.cell_below(a, p[a]), layout.cell_above_node(a, p[a])) {
+                (Some(lo), Some(hi)) => {
+                    let (lo, hi) = (cell(lo), cell(hi));
+                    if m.group[lo] == m.group[hi] {
+                        [m.group[lo], MIXED]
+                    } else {
+                        let rho = face_density(m, lo, hi);
+                        let carries = |c: usize| {
+                            if rho >= 0.5 * m.rho[c] {
+                                m.group[c]
+                            } else {
+                                MIXED
+                            }
+                        };
+                        [carries(lo), carries(hi)]
+                    }
+                }
+                (Some(lo), None) => [m.group[cell(lo)], MIXED],
+                (None, Some(hi)) => [m.group[cell(hi)], MIXED],
+                (None, None) => [m.group[cell(0)], MIXED],
+            };
+            pair.into_iter()
         })
         .collect()
 }
 
-/// Pure faces of all three components.
-pub(crate) fn all_pure_faces(m: &CellMaterial, layout: &Layout) -> [Vec<PhaseId>; 3] {
-    [0, 1, 2].map(|a| pure_faces(m, layout, a))
+/// Seed pairs of all three components.
+pub(crate) fn all_seed_phases(m: &CellMaterial, layout: &Layout) -> [Vec<PhaseId>; 3] {
+    [0, 1, 2].map(|a| seed_phases(m, layout, a))
 }
 
-/// The phases that own (or purely hold) at least one open face, ascending.
+/// Whether face `f` of a seed-pair array carries `phase`.
+#[inline]
+pub(crate) fn carries(pairs: &[PhaseId], f: usize, phase: PhaseId) -> bool {
+    pairs[2 * f] == phase || pairs[2 * f + 1] == phase
+}
+
+/// The phases named on at least one open face (owners or seed pairs), ascending.
 pub(crate) fn owning_phases(owners: &[Vec<PhaseId>; 3], open: &[Vec<f64>; 3]) -> Vec<PhaseId> {
     let mut seen: Vec<PhaseId> = Vec::new();
     for (own, op) in owners.iter().zip(open) {
-        for (&o, &s) in own.iter().zip(op) {
-            if s > 0.0 && o != MIXED && !seen.contains(&o) {
+        let per_face = own.len() / op.len().max(1);
+        for (i, &o) in own.iter().enumerate() {
+            if op[i / per_face.max(1)] > 0.0 && o != MIXED && !seen.contains(&o) {
                 seen.push(o);
             }
         }
@@ -120,14 +146,13 @@ pub(crate) struct Extension {
     pub layer: [Vec<u8>; 3],
 }
 
-/// `vel` on the open faces owned by `phase`, continued `layers` rings outward: each new face
-/// takes the mean of its 26 neighbours already known (fixed order: deterministic). Closed
-/// faces are neither read nor written; faces past the last ring keep `vel`'s values.
+/// `vel` on the open `seed` faces (component, index), continued `layers` rings outward: each
+/// new face takes the mean of its 26 neighbours already known (fixed order: deterministic).
+/// Closed faces are neither read nor written; faces past the last ring keep `vel`'s values.
 pub(crate) fn extend(
     vel: &MacGrid,
     open: &[Vec<f64>; 3],
-    owners: &[Vec<PhaseId>; 3],
-    phase: PhaseId,
+    seed: &(dyn Fn(usize, usize) -> bool + Sync),
     layers: u8,
 ) -> Extension {
     let layers = layers.min(UNREACHED - 1);
@@ -139,8 +164,7 @@ pub(crate) fn extend(
             vel.layout.periodic,
             &vel.comps[a],
             &open[a],
-            &owners[a],
-            phase,
+            &|f| seed(a, f),
             layers,
         );
         field.comps[a] = values;
@@ -182,15 +206,19 @@ fn extend_component(
     periodic: [bool; 3],
     comp: &[f64],
     open: &[f64],
-    owners: &[PhaseId],
-    phase: PhaseId,
+    seed: &(dyn Fn(usize) -> bool + Sync),
     layers: u8,
 ) -> (Vec<f64>, Vec<u8>) {
     let mut values = comp.to_vec();
-    let mut layer: Vec<u8> = owners
-        .par_iter()
-        .zip(open)
-        .map(|(&o, &s)| if s > 0.0 && o == phase { 0 } else { UNREACHED })
+    let mut layer: Vec<u8> = (0..comp.len())
+        .into_par_iter()
+        .map(|f| {
+            if open[f] > 0.0 && seed(f) {
+                0
+            } else {
+                UNREACHED
+            }
+        })
         .collect();
     let near = |f: usize| neighbours(dims, periodic, unidx(dims, f));
     let mut ring: Vec<usize> = (0..comp.len())
@@ -243,8 +271,8 @@ mod tests {
         owners[idx(dims, [3, 3, 3])] = 0;
         let mut comp = vec![-1.0; n];
         comp[idx(dims, [3, 3, 3])] = 2.5;
-        let (values, layer) =
-            extend_component(dims, [false; 3], &comp, &vec![1.0; n], &owners, 0, 2);
+        let seed = |f: usize| owners[f] == 0;
+        let (values, layer) = extend_component(dims, [false; 3], &comp, &vec![1.0; n], &seed, 2);
         for f in 0..n {
             let p = unidx(dims, f);
             let cheb = p.iter().map(|&c| c.abs_diff(3)).max().unwrap_or(0);
@@ -263,10 +291,11 @@ mod tests {
         // On a line of three faces the closed middle one keeps its value, is never averaged
         // in, and so cuts the far face off from the owned one.
         let dims = [3, 1, 1];
-        let owners = vec![0, 1, 1];
+        let owners = [0, 1, 1];
         let open = vec![1.0, 0.0, 1.0];
         let comp = vec![4.0, 100.0, 0.0];
-        let (values, layer) = extend_component(dims, [false; 3], &comp, &open, &owners, 0, 3);
+        let seed = |f: usize| owners[f] == 0;
+        let (values, layer) = extend_component(dims, [false; 3], &comp, &open, &seed, 3);
         assert_eq!(values, vec![4.0, 100.0, 0.0]);
         assert_eq!(layer, vec![0, UNREACHED, UNREACHED]);
     }

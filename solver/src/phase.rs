@@ -29,6 +29,42 @@ pub(crate) struct CellMaterial {
     pub mu: Vec<f64>,
     pub phi: Vec<f64>,
     pub chi: Vec<PhaseId>,
+    /// The cell's momentum group (see [`momentum_groups`]).
+    pub group: Vec<PhaseId>,
+}
+
+/// Phases whose densities differ by less than this factor share one velocity field.
+pub(crate) const GROUP_RATIO: f64 = 10.0;
+
+/// Each phase's momentum group: phases sorted by density and chained while neighbours differ
+/// by less than [`GROUP_RATIO`], named by the densest member. One velocity field serves a
+/// group, as in a one-fluid solver: the momentum a blended stencil hands across an interface
+/// is then at most a factor of ten off, and sharing keeps the normal velocity the projection
+/// leaves on faces the interface crosses (two fields extended from each side's interior
+/// slowed a 3:1 Rayleigh–Taylor wave by 11 %). Phases further apart (water and air) get a
+/// field each (see `extension.rs`).
+pub(crate) fn momentum_groups(phases: &[PhaseProps]) -> Vec<PhaseId> {
+    let mut order: Vec<usize> = (0..phases.len()).collect();
+    order.sort_by(|&a, &b| {
+        phases[a]
+            .density
+            .total_cmp(&phases[b].density)
+            .then(a.cmp(&b))
+    });
+    let mut group = vec![0; phases.len()];
+    let mut start = 0;
+    for i in 1..=order.len() {
+        let split = i == order.len()
+            || phases[order[i]].density >= GROUP_RATIO * phases[order[i - 1]].density;
+        if split {
+            let name = order[i - 1] as PhaseId;
+            for &p in &order[start..i] {
+                group[p] = name;
+            }
+            start = i;
+        }
+    }
+    group
 }
 
 /// Checks the phase table and field and looks the properties up per cell.
@@ -89,11 +125,18 @@ pub(crate) fn cell_material(
         .par_iter()
         .map(|&c| phases[usize::from(c)].viscosity)
         .collect();
+    let groups = momentum_groups(phases);
+    let group = field
+        .chi
+        .par_iter()
+        .map(|&c| groups[usize::from(c)])
+        .collect();
     Ok(CellMaterial {
         rho,
         mu,
         phi: field.phi.clone(),
         chi: field.chi.clone(),
+        group,
     })
 }
 
