@@ -4,10 +4,11 @@
 //! continuous, but the tangential ones jump (air slips past a falling drop). Interpolating
 //! across the jump, as semi-Lagrangian advection and the tracker's backtrace do, hands the
 //! light phase's velocity to the heavy one, and at 1000:1 that is a large momentum leak.
-//! Each phase therefore gets its own field: its velocity on the faces it owns, continued
-//! outward a few faces by averaging (the ghost velocity of two-velocity treatments, Rudman
-//! 1998; the velocity extrapolation of free-surface solvers), so a stencil near the interface
-//! only ever reads one phase's motion.
+//! Each momentum group of phases (`phase::momentum_groups`: densities within 10×) therefore
+//! gets its own field: its velocity on the faces it owns, continued outward a few faces by
+//! averaging (the ghost velocity of two-velocity treatments, Rudman 1998; the velocity
+//! extrapolation of free-surface solvers), so a stencil near the interface only ever reads one
+//! group's motion. "Phase" below means such a group, named by its densest member.
 
 use crate::layout::{idx, unidx, Layout};
 use crate::mac::MacGrid;
