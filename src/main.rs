@@ -4,6 +4,7 @@
 mod bench;
 mod bench_front;
 mod checkpoint;
+mod measurements;
 mod output;
 mod render;
 mod run;

@@ -8,13 +8,14 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use polyphase_coupling::{interface_extent, CoupledSim, FrameReport};
+use polyphase_coupling::{CoupledSim, FrameReport};
 use polyphase_grid::vdb::{encode, phase_field_grids, Compression, VdbGrid};
 use polyphase_scenes::Scene;
-use polyphase_tracker::{ContourTracker, InterfaceTracker, PhaseId, StepStats};
+use polyphase_tracker::{ContourTracker, InterfaceTracker, StepStats};
 use serde_json::{json, Value};
 
 use crate::checkpoint::{restore_contour, Checkpoint, Totals};
+use crate::measurements::add_measurements;
 use crate::output::RunFolder;
 use crate::run::{progress, Progress, Start};
 use crate::summary::Summary;
@@ -221,26 +222,6 @@ fn frame_line<T: InterfaceTracker>(
         "interface_cells": report.interface_cells,
         "interface_lag": report.interface_lag,
     });
-    add_diagnostics(&mut line, scene, tracker);
+    add_measurements(&mut line, scene, mesh);
     line
-}
-
-/// Scene-specific measurements: the surge front of a single column, the bubble and spike
-/// tips of Rayleigh–Taylor (the phases are the scene's second and first).
-fn add_diagnostics(line: &mut Value, scene: &Scene, tracker: &impl InterfaceTracker) {
-    let mesh = tracker.mesh();
-    match scene.file.name.as_str() {
-        "dambreak_column" => {
-            if let Some((_, front)) = interface_extent(mesh, 1 as PhaseId, None, 0) {
-                line["surge_front"] = json!(front - scene.grid.origin.x);
-            }
-        }
-        "rayleigh_taylor" => {
-            if let Some((spike, bubble)) = interface_extent(mesh, 0, Some(1), 1) {
-                line["bubble_tip"] = json!(bubble);
-                line["spike_tip"] = json!(spike);
-            }
-        }
-        _ => {}
-    }
 }

@@ -12,6 +12,7 @@ use polyphase_tracker::{metrics, ContourTracker, InterfaceTracker, LabeledMesh, 
 use serde_json::{json, Value};
 
 use crate::checkpoint::{restore_contour, Checkpoint, Totals};
+use crate::measurements::add_measurements;
 use crate::output::RunFolder;
 use crate::run::{progress, Progress, Start};
 use crate::summary::Summary;
@@ -149,7 +150,7 @@ fn track<T: InterfaceTracker>(
         Progress::Fresh(first) => {
             summary.add_step(&first);
             folder.write_frame(0, tracker.mesh())?;
-            folder.append_stats(&frame_line(0, 0.0, 0, &first, &tracker, &names))?;
+            folder.append_stats(&frame_line(0, 0.0, 0, &first, &tracker, scene))?;
             save(0, &tracker, &summary, 0.0)?;
             0
         }
@@ -175,7 +176,7 @@ fn track<T: InterfaceTracker>(
         stats
             .stages
             .push(("write", write_start.elapsed().as_secs_f64()));
-        let mut line = frame_line(frame, time, steps, &stats, &tracker, &names);
+        let mut line = frame_line(frame, time, steps, &stats, &tracker, scene);
         if let (true, Some(initial_mesh)) = (frame == frames, initial_mesh) {
             add_period_errors(&mut line, &tracker, initial_mesh, &reference, &names, scene);
         }
@@ -218,8 +219,9 @@ fn frame_line(
     steps: usize,
     stats: &StepStats,
     tracker: &impl InterfaceTracker,
-    names: &[String],
+    scene: &Scene,
 ) -> Value {
+    let names = scene.phase_names();
     let volumes: BTreeMap<&str, f64> = names
         .iter()
         .map(String::as_str)
@@ -227,7 +229,7 @@ fn frame_line(
         .collect();
     let timings: BTreeMap<&str, f64> = stats.stages.iter().copied().collect();
     let mesh = tracker.mesh();
-    json!({
+    let mut line = json!({
         "frame": frame,
         "time": time,
         "steps": steps,
@@ -236,7 +238,9 @@ fn frame_line(
         "mesh": { "vertices": mesh.vertices.len(), "triangles": mesh.triangles.len() },
         "cells": stats.cells,
         "interface_cells": stats.interface_cells,
-    })
+    });
+    add_measurements(&mut line, scene, mesh);
+    line
 }
 
 /// For a periodic flow the shapes should be back where they started: relative volume error per

@@ -190,6 +190,25 @@ fn bad_scene_input_fails_with_one_line_and_writes_nothing() {
         Some("v 0 0 zero\nf 1 2 3\n"),
         &["shapes[0].file", "shape.obj", "not a valid OBJ"],
     );
+    let unknown = format!(
+        "{}\n[[measure]]\nkind = \"pieces\"\nphase = \"honey\"\n",
+        sphere("water", 0.35, 0)
+    );
+    assert_refused(
+        &dir,
+        "measure_phase",
+        &scene_text(TWO_LIQUIDS, &unknown),
+        None,
+        &["measure[0].phase", "unknown phase 'honey'"],
+    );
+    let axis = "[[measure]]\nkind = \"front\"\nphase = \"water\"\naxis = \"w\"\n";
+    assert_refused(
+        &dir,
+        "measure_axis",
+        &scene_text(TWO_LIQUIDS, axis),
+        None,
+        &["measure[0].axis", "must be x, y or z"],
+    );
     // The octahedron without its last face: three edges with one face each.
     let open = octahedron([0.5; 3], 0.3).replace("f 1 4 6\n", "");
     assert_refused(
@@ -214,4 +233,49 @@ fn priority_settles_an_overlap_and_the_higher_one_wins() {
     // Same phase, same priority: a union, no conflict.
     let union = format!("{}\n{}", sphere("oil", 0.35, 0), sphere("oil", 0.65, 0));
     assert!(Scene::parse(&scene_text(TWO_LIQUIDS, &union), "p.toml").is_ok());
+}
+
+#[test]
+fn declared_measurements_reach_the_stats() {
+    let dir = scratch("measure_stats");
+    let shapes = format!(
+        "{}\n{}\n[[measure]]\nkind = \"pieces\"\nphase = \"water\"\n\n\
+         [[measure]]\nkind = \"centroid\"\nphase = \"oil\"\n\n\
+         [[measure]]\nkind = \"front\"\nname = \"reach\"\nphase = \"oil\"\naxis = \"x\"\n",
+        sphere("water", 0.3, 0),
+        sphere("oil", 0.7, 0)
+    );
+    let path = dir.join("two.toml");
+    fs::write(&path, scene_text(TWO_LIQUIDS, &shapes)).unwrap();
+    let out = dir.join("out");
+    let o = run_file(&path, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stats = fs::read_to_string(out.join("stats.jsonl")).unwrap();
+    // The last line is the run's summary; the one before it is frame 1's.
+    let lines: Vec<&str> = stats.lines().collect();
+    let last: serde_json::Value = serde_json::from_str(lines[lines.len() - 2]).unwrap();
+    let pieces = last["pieces_water"].as_array().unwrap();
+    assert_eq!(pieces.len(), 1, "{last}");
+    let (r, h) = (0.2, 1.0 / 16.0);
+    let volume = pieces[0]["volume"].as_f64().unwrap();
+    let exact = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+    // One step of the volume correction leaves −0.075 % of the exact ball (what it has not
+    // yet given back of the first contouring's loss at 3.2 cells per radius); the piece is the
+    // whole phase, so its volume must be the phase's, within that 0.1 %.
+    assert!((volume / exact - 1.0).abs() < 1e-3, "{volume} vs {exact}");
+    // A ball contoured at 3.2 cells per radius: vertices within a tenth of a cell of the
+    // sphere, which is 1/32 of the radius.
+    for key in ["nearest", "farthest"] {
+        let x = pieces[0][key].as_f64().unwrap();
+        assert!((x - 1.0).abs() < 0.1 * h / r, "{key} {x}");
+    }
+    let c = last["centroid_oil"].as_array().unwrap();
+    let c: Vec<f64> = c.iter().map(|v| v.as_f64().unwrap()).collect();
+    // Symmetric contouring about the ball's centre, up to the cell-aligned asymmetry.
+    assert!(
+        (c[0] - 0.7).abs() < 0.05 * h && (c[1] - 0.5).abs() < 0.05 * h,
+        "{c:?}"
+    );
+    let reach = last["reach"].as_f64().unwrap();
+    assert!((reach - 0.9).abs() < 0.5 * h, "oil reaches x = {reach}");
 }

@@ -1,6 +1,146 @@
-//! Measurements of the interface for stats: surge-front position, bubble and spike tips.
+//! Measurements of the interface for stats, as declared by the scene's `[[measure]]` tables:
+//! fronts, tips, centroids and connected pieces of a phase.
 
-use polyphase_tracker::{LabeledMesh, PhaseId};
+use glam::DVec3;
+use polyphase_scenes::MeasureKind;
+use polyphase_tracker::{LabeledMesh, PhaseId, OUTSIDE};
+
+/// One measurement's value; `None` when the phase or interface is gone.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Measured {
+    /// A coordinate (front).
+    Value(Option<f64>),
+    /// Smallest and largest coordinate (tips).
+    Range(Option<(f64, f64)>),
+    /// A point (centroid).
+    Point(Option<DVec3>),
+    /// Connected pieces, in the order of their first triangle in the mesh.
+    Pieces(Vec<Piece>),
+}
+
+/// One connected piece of a phase.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Piece {
+    /// Enclosed volume (m³).
+    pub volume: f64,
+    /// Centre of the enclosed volume.
+    pub centroid: DVec3,
+    /// Radius of the sphere of the same volume.
+    pub radius: f64,
+    /// Smallest vertex distance from the centroid over `radius` (1 for a sphere).
+    pub nearest: f64,
+    /// Largest vertex distance from the centroid over `radius` (1 for a sphere).
+    pub farthest: f64,
+}
+
+/// Evaluates one measurement on the tracker's mesh.
+pub fn measure(mesh: &LabeledMesh, kind: &MeasureKind) -> Measured {
+    match *kind {
+        MeasureKind::Front { phase, axis } => {
+            Measured::Value(interface_extent(mesh, phase, None, axis).map(|r| r.1))
+        }
+        MeasureKind::Tips { a, b, axis } => {
+            Measured::Range(interface_extent(mesh, a, Some(b), axis))
+        }
+        MeasureKind::Centroid { phase } => {
+            let all: Vec<usize> = (0..mesh.triangles.len())
+                .filter(|&t| bounds(mesh, t, phase) != 0.0)
+                .collect();
+            let (volume, moment) = volume_moment(mesh, &all, phase);
+            Measured::Point((volume > 0.0).then(|| moment / volume))
+        }
+        MeasureKind::Pieces { phase } => Measured::Pieces(pieces(mesh, phase)),
+    }
+}
+
+/// +1 when triangle `t` bounds `phase` from its back side, −1 from its front side, 0 when it
+/// does not separate `phase` from anything else.
+fn bounds(mesh: &LabeledMesh, t: usize, phase: PhaseId) -> f64 {
+    let [front, back] = mesh.labels[t];
+    if front == back {
+        0.0
+    } else if back == phase {
+        1.0
+    } else if front == phase {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+/// Volume and first moment ∫x dV of the region of `phase` bounded by `triangles` (divergence
+/// theorem over tetrahedra from the first corner, which keeps the products small).
+fn volume_moment(mesh: &LabeledMesh, triangles: &[usize], phase: PhaseId) -> (f64, DVec3) {
+    let Some(&first) = triangles.first() else {
+        return (0.0, DVec3::ZERO);
+    };
+    let origin = mesh.corners(first)[0];
+    let (mut volume, mut moment) = (0.0, DVec3::ZERO);
+    for &t in triangles {
+        let [a, b, c] = mesh.corners(t);
+        let (a, b, c) = (a - origin, b - origin, c - origin);
+        let v = bounds(mesh, t, phase) * a.dot(b.cross(c)) / 6.0;
+        volume += v;
+        moment += v * (a + b + c) / 4.0;
+    }
+    (volume, moment + volume * origin)
+}
+
+/// The connected pieces of `phase`: its boundary triangles grouped by shared vertices.
+pub fn pieces(mesh: &LabeledMesh, phase: PhaseId) -> Vec<Piece> {
+    let mut parent: Vec<u32> = (0..mesh.vertices.len() as u32).collect();
+    fn root(parent: &mut [u32], mut v: u32) -> u32 {
+        while parent[v as usize] != v {
+            let up = parent[parent[v as usize] as usize];
+            parent[v as usize] = up;
+            v = up;
+        }
+        v
+    }
+    let boundary: Vec<usize> = (0..mesh.triangles.len())
+        .filter(|&t| bounds(mesh, t, phase) != 0.0 && mesh.labels[t] != [OUTSIDE, OUTSIDE])
+        .collect();
+    for &t in &boundary {
+        let [a, b, c] = mesh.triangles[t];
+        for (x, y) in [(a, b), (b, c)] {
+            let (rx, ry) = (root(&mut parent, x), root(&mut parent, y));
+            if rx != ry {
+                parent[rx.max(ry) as usize] = rx.min(ry);
+            }
+        }
+    }
+    let mut groups: Vec<(u32, Vec<usize>)> = Vec::new();
+    for &t in &boundary {
+        let r = root(&mut parent, mesh.triangles[t][0]);
+        match groups.iter_mut().find(|(g, _)| *g == r) {
+            Some((_, list)) => list.push(t),
+            None => groups.push((r, vec![t])),
+        }
+    }
+    groups
+        .iter()
+        .map(|(_, triangles)| {
+            let (volume, moment) = volume_moment(mesh, triangles, phase);
+            let centroid = moment / volume;
+            let radius = (3.0 * volume.abs() / (4.0 * std::f64::consts::PI)).cbrt();
+            let (mut nearest, mut farthest) = (f64::INFINITY, 0.0f64);
+            for &t in triangles {
+                for &v in &mesh.triangles[t] {
+                    let d = mesh.vertices[v as usize].distance(centroid);
+                    nearest = nearest.min(d);
+                    farthest = farthest.max(d);
+                }
+            }
+            Piece {
+                volume,
+                centroid,
+                radius,
+                nearest: nearest / radius,
+                farthest: farthest / radius,
+            }
+        })
+        .collect()
+}
 
 /// (min, max) along `axis` of the vertices of triangles separating phase `a` from `b`
 /// (`b = None`: from any other phase, domain boundary included); `None` when there are none.
@@ -53,5 +193,67 @@ mod tests {
         assert_eq!(interface_extent(&mesh, 0, Some(1), 0), Some((0.0, 1.0)));
         assert_eq!(interface_extent(&mesh, 1, None, 1), Some((-2.0, 1.0)));
         assert_eq!(interface_extent(&mesh, 2, None, 1), None);
+    }
+
+    /// An octahedron with vertices at distance `r` from `centre`, labeled [outside, inside].
+    fn octahedron(centre: DVec3, r: f64, inside: PhaseId, outside: PhaseId) -> LabeledMesh {
+        let vertices = [
+            DVec3::X,
+            DVec3::NEG_X,
+            DVec3::Y,
+            DVec3::NEG_Y,
+            DVec3::Z,
+            DVec3::NEG_Z,
+        ]
+        .map(|d| centre + r * d)
+        .to_vec();
+        let mut triangles = Vec::new();
+        for (x, y, z) in [
+            (0, 2, 4),
+            (2, 1, 4),
+            (1, 3, 4),
+            (3, 0, 4),
+            (2, 0, 5),
+            (1, 2, 5),
+            (3, 1, 5),
+            (0, 3, 5),
+        ] {
+            triangles.push([x, y, z]);
+        }
+        let n = triangles.len();
+        LabeledMesh {
+            vertices,
+            triangles,
+            labels: vec![[outside, inside]; n],
+        }
+    }
+
+    #[test]
+    fn pieces_are_found_with_their_volume_and_roundness() {
+        // Two octahedra of water (phase 1) in air (phase 0): each encloses (4/3) r³, and its
+        // vertices lie at r from the centroid, over the equivalent radius (1/π)^(1/3) r.
+        let mut mesh = octahedron(DVec3::new(1.0, 2.0, 3.0), 0.5, 1, 0);
+        mesh.append(&octahedron(DVec3::new(-1.0, 0.0, 0.0), 0.25, 1, 0));
+        let found = pieces(&mesh, 1);
+        assert_eq!(found.len(), 2);
+        let ratio = std::f64::consts::PI.cbrt();
+        for (p, (c, r)) in found.iter().zip([
+            (DVec3::new(1.0, 2.0, 3.0), 0.5),
+            (DVec3::new(-1.0, 0.0, 0.0), 0.25),
+        ]) {
+            assert!((p.volume - 4.0 / 3.0 * r * r * r).abs() < 1e-12, "{p:?}");
+            assert!(p.centroid.distance(c) < 1e-12, "{p:?}");
+            assert!((p.farthest - ratio).abs() < 1e-12 && (p.nearest - ratio).abs() < 1e-12);
+        }
+        // The air around them is one region with negative enclosed volume seen from inside.
+        assert!(pieces(&mesh, 2).is_empty());
+        match measure(&mesh, &MeasureKind::Centroid { phase: 1 }) {
+            Measured::Point(Some(c)) => {
+                // Volume-weighted: 8 : 1 between the two.
+                let expected = (8.0 * DVec3::new(1.0, 2.0, 3.0) + DVec3::new(-1.0, 0.0, 0.0)) / 9.0;
+                assert!(c.distance(expected) < 1e-12, "{c}");
+            }
+            other => panic!("{other:?}"),
+        }
     }
 }

@@ -5,10 +5,12 @@
 
 pub mod diagnostics;
 pub mod error;
+pub mod rt_theory;
 pub mod setup;
 pub mod sim;
 
-pub use diagnostics::interface_extent;
+pub use diagnostics::{interface_extent, measure, pieces, Measured, Piece};
 pub use error::CouplingError;
+pub use rt_theory::RtLinear;
 pub use setup::{from_scene, with_tracker};
 pub use sim::{interface_lag, CoupledSim, FrameReport, TimeControl};

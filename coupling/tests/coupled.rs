@@ -1,7 +1,7 @@
 //! Coupled runs at low resolution: Rayleigh–Taylor growth against linear theory, volume
 //! conservation, determinism across thread counts.
 
-use polyphase_coupling::{from_scene, interface_extent, CoupledSim};
+use polyphase_coupling::{from_scene, interface_extent, CoupledSim, RtLinear};
 use polyphase_scenes::{builtin, Scene};
 use polyphase_tracker::{ContourTracker, InterfaceTracker};
 
@@ -19,32 +19,11 @@ fn amplitude(sim: &CoupledSim<ContourTracker>) -> f64 {
     0.5 * (bubble - spike)
 }
 
-/// Linear theory with kinematic viscosity ν equal in both fluids (Duff, Harlow & Hirt 1962,
-/// the equal-ν form of Chandrasekhar 1961 §94): the amplitude obeys
-/// a'' + 2νk² a' − Agk a = 0, whose roots are n = −νk² ± √(Agk + ν²k⁴). From rest,
-/// a(t)/a₀ = (−m e^{nt} + n e^{mt})/(n − m) with m = −2νk² − n. Returns the growth rate n that
-/// reproduces the measured ratio (bisection; the ratio grows monotonically with n).
-fn fitted_rate(ratio: f64, t: f64, nu_k2: f64) -> f64 {
-    let model = |n: f64| {
-        let m = -2.0 * nu_k2 - n;
-        (-m * (n * t).exp() + n * (m * t).exp()) / (n - m)
-    };
-    let (mut lo, mut hi) = (1e-3, 10.0);
-    for _ in 0..100 {
-        let mid = 0.5 * (lo + hi);
-        if model(mid) < ratio {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    lo
-}
-
 /// Runs the built-in Rayleigh–Taylor slab in its linear regime (amplitude 0.005 = 0.03/k,
-/// 32 solver cells per wavelength) to t = 1.2 s and returns (measured, theoretical) growth
-/// rates; `every_step` advances the tracker every solver step, else at the default
-/// `time.cfl`.
+/// 32 solver cells per wavelength, ν equal in both fluids) to t = 1.2 s and returns the mean
+/// growth rate ln(a(t)/a₀)/t, measured and from the exact linear theory from rest
+/// ([`RtLinear`]; for ν = 0, a/a₀ = cosh(√(Agk) t)); `every_step` advances the tracker every
+/// solver step, else at the default `time.cfl`.
 fn rayleigh_taylor_rate(nu: f64, every_step: bool) -> (f64, f64) {
     let frames = if every_step {
         "frames = 1\ncfl = 0.001"
@@ -61,31 +40,41 @@ fn rayleigh_taylor_rate(nu: f64, every_step: bool) -> (f64, f64) {
     let scene = Scene::parse(&text, "rt-linear").unwrap();
     let (mut sim, _) = from_scene(&scene).unwrap();
     let a0 = amplitude(&sim);
-    sim.advance_to(1.2).unwrap();
+    let t = 1.2;
+    sim.advance_to(t).unwrap();
     let k = 2.0 * std::f64::consts::PI;
     // Atwood (3 − 1)/(3 + 1) = 0.5, g = 1 in the scene.
-    let nu_k2 = nu * k * k;
-    let theory = (0.5 * k + nu_k2 * nu_k2).sqrt() - nu_k2;
-    (fitted_rate(amplitude(&sim) / a0, 1.2, nu_k2), theory)
+    let theory = if nu > 0.0 {
+        let rt = RtLinear {
+            k,
+            g: 1.0,
+            heavy: (3.0, 3.0 * nu),
+            light: (1.0, nu),
+        };
+        rt.amplitude_ratio(t)
+    } else {
+        ((0.5 * k).sqrt() * t).cosh()
+    };
+    ((amplitude(&sim) / a0).ln() / t, theory.ln() / t)
 }
 
 #[test]
 fn rayleigh_taylor_growth_matches_viscous_linear_theory() {
-    // ν = 0.01 m²/s cuts the inviscid rate √(Agk) = 1.77 /s by 20 % to 1.42 /s, so the check
-    // tells the viscous theory from the inviscid one. 10 % is the tolerance; measured
-    // −8.6 % at this resolution (−7.6 % … −9.9 % from 32 to 64 cells per wavelength), the
-    // remainder being the first-order sharp-interface discretisation and the approximate
-    // equal-ν theory. Runs are bit-deterministic, so the margin does not flake.
+    // ν = 0.01 m²/s slows the growth well below the inviscid theory (a/a₀ at 1.2 s: 2.90
+    // against 4.25), so the check tells the viscous theory from the inviscid one. 5 % is the
+    // issue's tolerance; measured +0.2 % (a/a₀ = 2.907 against 2.901).
     let (rate, theory) = rayleigh_taylor_rate(0.01, true);
     assert!(
-        (rate - theory).abs() < 0.10 * theory,
+        (rate - theory).abs() < 0.05 * theory,
         "viscous growth rate {rate} vs theory {theory}"
     );
 }
 
 #[test]
 fn rayleigh_taylor_growth_matches_inviscid_linear_theory() {
-    // Exact inviscid linear theory (tanh(kH) = tanh 2π ≈ 1 for these depths); measured −2.6 %.
+    // Exact inviscid linear theory (tanh(kH) = tanh 2π ≈ 1 for these depths). Without
+    // viscosity the interface is a vortex sheet, which the grid smears over a cell like a
+    // numerical viscosity: measured −5.4 %, so 10 % here against the viscous cases' 5 %.
     let (rate, theory) = rayleigh_taylor_rate(0.0, true);
     assert!(
         (rate - theory).abs() < 0.10 * theory,
@@ -95,13 +84,12 @@ fn rayleigh_taylor_growth_matches_inviscid_linear_theory() {
 
 #[test]
 fn rayleigh_taylor_growth_at_the_default_tracker_cfl() {
-    // The tracker advances every 8 of its cells of travel and the solver samples its mesh
-    // advected to every step. Measured −9.9 % against viscous linear theory (−8.6 % with a
-    // tracker step per solver step): the 5 % is NOT met yet (README, known gaps);
-    // this guards the measured figure with the 10 % of the every-step test above plus 2 %.
+    // The tracker advances every 8 of its cells of travel (here only at the end: the linear
+    // flow moves under 0.03 m) and the solver samples its mesh advected to every step. The
+    // issue's 5 % against viscous linear theory; measured +0.03 %.
     let (rate, theory) = rayleigh_taylor_rate(0.01, false);
     assert!(
-        (rate - theory).abs() < 0.12 * theory,
+        (rate - theory).abs() < 0.05 * theory,
         "viscous growth rate {rate} vs theory {theory} at the default cfl"
     );
 }

@@ -25,6 +25,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "rayleigh_taylor",
         include_str!("../builtin/rayleigh_taylor.toml"),
     ),
+    (
+        "rayleigh_taylor_re256",
+        include_str!("../builtin/rayleigh_taylor_re256.toml"),
+    ),
     ("fall", include_str!("../builtin/fall.toml")),
     ("balls", include_str!("../builtin/balls.toml")),
     ("drop_pool", include_str!("../builtin/drop_pool.toml")),

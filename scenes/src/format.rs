@@ -42,6 +42,30 @@ pub struct SceneFile {
     /// Optional hints for the offline renderer (`render/`); absent fields use its defaults.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub render: Option<RenderHints>,
+    /// Measurements of the interface written to `stats.jsonl` every frame (`[[measure]]`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub measure: Vec<MeasureSpec>,
+}
+
+/// One measurement as written: `kind` selects which of the optional fields are required.
+/// `front` (phase, axis): the largest coordinate along `axis` of the phase's surface; `tips`
+/// (phases = [a, b], axis): the smallest and largest coordinate of the a–b interface;
+/// `centroid` (phase): the centre of the phase's volume; `pieces` (phase): every connected
+/// piece of the phase with its volume, centroid and roundness.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeasureSpec {
+    pub kind: String,
+    /// Key in `stats.jsonl`; default `<kind>_<phases>[_<axis>]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phase: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phases: Option<Vec<String>>,
+    /// `x`, `y` or `z`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<String>,
 }
 
 /// Render hints read by the Mitsuba pipeline; every field optional.

@@ -5,6 +5,7 @@
 pub mod builtin;
 pub mod error;
 pub mod format;
+pub mod measure;
 pub mod mesh_file;
 pub mod mesh_sdf;
 pub mod obj;
@@ -17,6 +18,7 @@ pub mod volume;
 pub use builtin::{builtin, load, BUILTIN, DEFAULT_SCENE};
 pub use error::SceneError;
 pub use format::{PreconditionerSpec, SceneFile, SolverSpec, TrackerKind, TrackerSpec};
+pub use measure::{Measure, MeasureKind};
 pub use scene::Scene;
 pub use shapes::InitialPhases;
 pub use velocity::AnalyticVelocity;

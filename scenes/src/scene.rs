@@ -6,6 +6,7 @@ use glam::DVec3;
 use polyphase_grid::{GridSpec, PhaseId};
 
 use crate::error::SceneError;
+use crate::measure::{compile_measures, Measure};
 use polyphase_tracker::front::params::FrontParams;
 
 use crate::format::{
@@ -34,6 +35,8 @@ pub struct Scene {
     /// The solver's grid of a coupled scene (same box as `grid`, cells a whole multiple
     /// larger); `None` for a passive scene.
     pub solver_grid: Option<GridSpec>,
+    /// The measurements written to stats every frame, in file order.
+    pub measures: Vec<Measure>,
 }
 
 impl Scene {
@@ -134,12 +137,14 @@ impl Scene {
         }
         // Painting order: a later shape wins, so ascending priority (stable: file order among equals).
         shapes.sort_by_key(|s| s.priority);
+        let measures = compile_measures(&file.measure, &phases, &bad)?;
         Ok(Scene {
             file,
             grid,
             initial: InitialPhases { background, shapes },
             velocity,
             solver_grid,
+            measures,
         })
     }
 

@@ -1,0 +1,135 @@
+//! Interface measurements declared in the scene file (`[[measure]]`), validated: which
+//! quantity, of which phases, written to stats under which name.
+
+use polyphase_grid::PhaseId;
+
+use crate::error::SceneError;
+use crate::format::MeasureSpec;
+
+/// What one measurement reads off the labeled mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MeasureKind {
+    /// The largest coordinate along `axis` of the surface of `phase` (a surge front).
+    Front { phase: PhaseId, axis: usize },
+    /// The smallest and largest coordinate along `axis` of the interface between two phases
+    /// (Rayleigh–Taylor's spike and bubble tips).
+    Tips { a: PhaseId, b: PhaseId, axis: usize },
+    /// The centre of the volume of `phase`.
+    Centroid { phase: PhaseId },
+    /// Each connected piece of `phase`: volume, centroid, and its vertices' smallest and
+    /// largest distance from the centroid over the equivalent radius (a drop's roundness).
+    Pieces { phase: PhaseId },
+}
+
+/// A validated measurement with its stats key.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measure {
+    pub name: String,
+    pub kind: MeasureKind,
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// Validates the scene's `[[measure]]` tables against its phase names; errors name the table.
+pub fn compile_measures(
+    specs: &[MeasureSpec],
+    phases: &[String],
+    bad: &dyn Fn(&str, String) -> SceneError,
+) -> Result<Vec<Measure>, SceneError> {
+    let mut out: Vec<Measure> = Vec::with_capacity(specs.len());
+    for (i, spec) in specs.iter().enumerate() {
+        let place = format!("measure[{i}]");
+        let phase_id = |name: &str, field: &str| -> Result<PhaseId, SceneError> {
+            phases
+                .iter()
+                .position(|p| p == name)
+                .map(|p| p as PhaseId)
+                .ok_or_else(|| {
+                    bad(
+                        &format!("{place}.{field}"),
+                        format!("unknown phase '{name}' (phases: {})", phases.join(", ")),
+                    )
+                })
+        };
+        let one_phase = || -> Result<(PhaseId, &str), SceneError> {
+            let name = spec.phase.as_deref().ok_or_else(|| {
+                bad(
+                    &place,
+                    format!("kind '{}' needs the field 'phase'", spec.kind),
+                )
+            })?;
+            Ok((phase_id(name, "phase")?, name))
+        };
+        let axis = || -> Result<usize, SceneError> {
+            let a = spec.axis.as_deref().ok_or_else(|| {
+                bad(
+                    &place,
+                    format!("kind '{}' needs the field 'axis'", spec.kind),
+                )
+            })?;
+            AXES.iter().position(|x| *x == a).ok_or_else(|| {
+                bad(
+                    &format!("{place}.axis"),
+                    format!("must be x, y or z, got '{a}'"),
+                )
+            })
+        };
+        let (kind, default_name) = match spec.kind.as_str() {
+            "front" => {
+                let (phase, name) = one_phase()?;
+                let axis = axis()?;
+                (
+                    MeasureKind::Front { phase, axis },
+                    format!("front_{name}_{}", AXES[axis]),
+                )
+            }
+            "tips" => {
+                let pair = spec.phases.as_deref().unwrap_or_default();
+                let [a, b] = pair else {
+                    return Err(bad(
+                        &place,
+                        "kind 'tips' needs the field 'phases' with two phase names".into(),
+                    ));
+                };
+                let (ia, ib) = (phase_id(a, "phases")?, phase_id(b, "phases")?);
+                if ia == ib {
+                    return Err(bad(
+                        &format!("{place}.phases"),
+                        format!("needs two different phases, got '{a}' twice"),
+                    ));
+                }
+                let axis = axis()?;
+                (
+                    MeasureKind::Tips { a: ia, b: ib, axis },
+                    format!("tips_{a}_{b}_{}", AXES[axis]),
+                )
+            }
+            "centroid" => {
+                let (phase, name) = one_phase()?;
+                (MeasureKind::Centroid { phase }, format!("centroid_{name}"))
+            }
+            "pieces" => {
+                let (phase, name) = one_phase()?;
+                (MeasureKind::Pieces { phase }, format!("pieces_{name}"))
+            }
+            other => {
+                return Err(bad(
+                    &format!("{place}.kind"),
+                    format!("unknown kind '{other}' (kinds: front, tips, centroid, pieces)"),
+                ))
+            }
+        };
+        let name = spec.name.clone().unwrap_or(default_name);
+        if name.trim().is_empty() {
+            return Err(bad(&format!("{place}.name"), "must not be empty".into()));
+        }
+        if out.iter().any(|m| m.name == name) {
+            return Err(bad(
+                &format!("{place}.name"),
+                format!("'{name}' is already the name of another measurement"),
+            ));
+        }
+        out.push(Measure { name, kind });
+    }
+    Ok(out)
+}

@@ -1,0 +1,31 @@
+//! The scene's declared measurements (`[[measure]]`) as JSON for `stats.jsonl`: a front is a
+//! number, tips are `{min, max}`, a centroid is `[x, y, z]`, pieces are a list of
+//! `{volume, centroid, radius, nearest, farthest}`; `null` where the phase is gone.
+
+use polyphase_coupling::{measure, Measured};
+use polyphase_scenes::Scene;
+use polyphase_tracker::LabeledMesh;
+use serde_json::{json, Value};
+
+/// Adds each of the scene's measurements of `mesh` to the stats line under its name.
+pub fn add_measurements(line: &mut Value, scene: &Scene, mesh: &LabeledMesh) {
+    for m in &scene.measures {
+        line[m.name.as_str()] = match measure(mesh, &m.kind) {
+            Measured::Value(v) => json!(v),
+            Measured::Range(r) => {
+                r.map_or(Value::Null, |(min, max)| json!({ "min": min, "max": max }))
+            }
+            Measured::Point(p) => json!(p.map(|p| [p.x, p.y, p.z])),
+            Measured::Pieces(pieces) => json!(pieces
+                .iter()
+                .map(|p| json!({
+                    "volume": p.volume,
+                    "centroid": [p.centroid.x, p.centroid.y, p.centroid.z],
+                    "radius": p.radius,
+                    "nearest": p.nearest,
+                    "farthest": p.farthest,
+                }))
+                .collect::<Vec<_>>()),
+        };
+    }
+}
