@@ -5,6 +5,7 @@
 
 pub mod diagnostics;
 pub mod error;
+pub mod pending;
 pub mod rt_theory;
 pub mod setup;
 pub mod sim;

@@ -2,15 +2,16 @@
 
 use std::time::Instant;
 
-use polyphase_solver::{MacGrid, PhaseProps, Solver, SolverState};
+use polyphase_solver::{PhaseProps, Solver, SolverState};
 use polyphase_tracker::{InterfaceTracker, PhaseField, StepStats};
 
 use crate::error::CouplingError;
+use crate::pending::PendingSteps;
 
 /// Time-step control. Solver: dt = min(cfl·h/(max|u| + √(h|g|)), max_dt), shortened so a
 /// frame ends exactly on its time. Tracker (loose coupling, paper 004 §7.5): it advances once
 /// the fluid has moved up to `tracker_travel` metres since its last advance (and at every
-/// frame end), in the time-averaged solver velocity of those steps; each tracker step
+/// frame end), through each of those steps' velocities in turn; each tracker step
 /// resamples the mesh and costs volume, so fewer, larger tracker steps are cheaper and
 /// conserve better.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,14 +22,6 @@ pub struct TimeControl {
     pub max_dt: f64,
     /// Largest distance (m) the fluid may move during one tracker step.
     pub tracker_travel: f64,
-}
-
-/// Solver steps not yet applied to the tracker: their summed dt-weighted velocity.
-struct Pending {
-    start: f64,
-    duration: f64,
-    travel: f64,
-    weighted: MacGrid,
 }
 
 /// What one frame of coupled steps did.
@@ -61,20 +54,6 @@ impl FrameReport {
             Some(e) => e.1 += secs,
             None => self.stages.push((name, secs)),
         }
-    }
-}
-
-impl Pending {
-    /// The time-averaged velocity of the pending steps.
-    fn average(&self) -> MacGrid {
-        let mut average = self.weighted.clone();
-        let inv = 1.0 / self.duration;
-        for a in 0..3 {
-            for w in average.component_mut(a) {
-                *w *= inv;
-            }
-        }
-        average
     }
 }
 
@@ -112,7 +91,7 @@ pub struct CoupledSim<T: InterfaceTracker> {
     control: TimeControl,
     time: f64,
     steps: usize,
-    pending: Option<Pending>,
+    pending: Option<PendingSteps>,
 }
 
 impl<T: InterfaceTracker> CoupledSim<T> {
@@ -205,11 +184,9 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         let t0 = Instant::now();
         let grid = *self.solver.grid();
         let mut field = match &self.pending {
-            Some(p) => {
-                let average = p.average();
-                self.tracker
-                    .sample_advected(&grid, &average, p.start, p.duration)
-            }
+            Some(p) => self
+                .tracker
+                .sample_advected(&grid, p, p.start(), p.duration()),
             None => self.tracker.sample(&grid),
         };
         // φ = ∞ means "no interface anywhere" (every other phase gone); any distance beyond
@@ -250,53 +227,30 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         }
         interface_secs += t2.elapsed().as_secs_f64();
         report.add("interface_velocity", interface_secs);
-        let speed = velocity.max_abs();
-        let pending = self.pending.get_or_insert_with(|| {
-            let mut zero = velocity.clone();
-            for a in 0..3 {
-                zero.component_mut(a).fill(0.0);
-            }
-            Pending {
-                start: self.time,
-                duration: 0.0,
-                travel: 0.0,
-                weighted: zero,
-            }
-        });
-        for a in 0..3 {
-            for (w, u) in pending
-                .weighted
-                .component_mut(a)
-                .iter_mut()
-                .zip(velocity.component(a))
-            {
-                *w += dt * u;
-            }
-        }
-        pending.duration += dt;
-        pending.travel += dt * speed;
+        let time = self.time;
+        let pending = self.pending.get_or_insert_with(|| PendingSteps::new(time));
+        pending.push(dt, velocity);
+        let travel = pending.travel();
         self.time += dt;
         self.steps += 1;
-        if sync || pending.travel >= self.control.tracker_travel {
+        if sync || travel >= self.control.tracker_travel {
             self.flush(report)?;
         }
         Ok(())
     }
 
-    /// Advances the tracker over the pending solver steps in their time-averaged velocity
+    /// Advances the tracker over the pending solver steps, each in its own velocity
     /// (divergence-free, as every step's velocity is).
     fn flush(&mut self, report: &mut FrameReport) -> Result<(), CouplingError> {
         let Some(pending) = self.pending.take() else {
             return Ok(());
         };
-        let average = pending.average();
+        let (start, duration) = (pending.start(), pending.duration());
         let grid = *self.solver.grid();
         let seen = self
             .tracker
-            .sample_advected(&grid, &average, pending.start, pending.duration);
-        let tracked: StepStats = self
-            .tracker
-            .advance(&average, pending.start, pending.duration)?;
+            .sample_advected(&grid, &pending, start, duration);
+        let tracked: StepStats = self.tracker.advance(&pending, start, duration)?;
         let lag = interface_lag(&seen, &self.tracker.sample(&grid));
         report.interface_lag = report.interface_lag.max(lag);
         for &(name, secs) in &tracked.stages {

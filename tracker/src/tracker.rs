@@ -61,13 +61,9 @@ pub trait InterfaceTracker: Send + Sync {
     fn phase_volumes(&self) -> Vec<f64>;
 }
 
-/// Departure point of the trajectory that reaches `x` at `t + dt` (classical RK4 backwards in
-/// time; the analytic test flows are smooth, so the fourth-order error is far below h).
+/// Departure point of the trajectory that reaches `x` at `t + dt`
+/// ([`VelocityField::departure`]: RK4 backwards, or piece by piece for a field that is
+/// piecewise in time).
 pub fn departure_point(v: &dyn VelocityField, x: DVec3, t: f64, dt: f64) -> DVec3 {
-    let t1 = t + dt;
-    let k1 = v.velocity(x, t1);
-    let k2 = v.velocity(x - 0.5 * dt * k1, t1 - 0.5 * dt);
-    let k3 = v.velocity(x - 0.5 * dt * k2, t1 - 0.5 * dt);
-    let k4 = v.velocity(x - dt * k3, t);
-    x - dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    v.departure(x, t, dt)
 }
