@@ -60,17 +60,17 @@ impl FrameReport {
 /// How far the interface the solver saw for the last step before a tracker step (`seen`, the
 /// previous mesh read at departure points) lies from the one the tracker step contoured
 /// (`now`), in solver cells: the largest difference of the distance to the two interfaces
-/// over the cells the contoured one passes within half a cell of. Only there is `seen`'s φ
-/// (the old mesh's distance read at departure points) the distance to the interface the
-/// solver saw: a straining flow scales it farther out, which is not a lag. The solver's
-/// interface lags by this much; resampling and the volume correction alone give a few
-/// hundredths of a cell.
+/// over the cells whose centres lie within h/8 of the contoured one. `seen`'s φ is the old
+/// mesh's distance read at the departure point, which a flow that compresses or stretches
+/// the interface's neighbourhood by a factor J scales by J; that close to the interface it
+/// adds at most (J − 1)·h/8, not a lag. The solver's interface lags by this much; resampling
+/// and the volume correction alone give a few hundredths of a cell.
 pub fn interface_lag(seen: &PhaseField, now: &PhaseField) -> f64 {
     let h = now.grid.h;
     let mut worst: f64 = 0.0;
     for c in 0..now.phi.len() {
         let (a, b) = (seen.phi[c], now.phi[c]);
-        if b >= 0.5 * h {
+        if b >= 0.125 * h {
             continue;
         }
         let gap = if seen.chi[c] == now.chi[c] {
