@@ -1,6 +1,6 @@
-//! The run folder (DESIGN.md "Output of a run"): every file is written to a temporary name and
-//! renamed into place, so a killed run never leaves a half-written frame. A killed run's folder
-//! is rewound to its last checkpoint before it continues.
+//! The run folder (ARCHITECTURE.md "Output folder"): every file is written to a temporary name
+//! and renamed into place, so a killed run never leaves a half-written frame. A killed run's
+//! folder is rewound to its last checkpoint before it continues.
 
 use std::fs;
 use std::io::Write;

@@ -171,12 +171,7 @@ fn simulate<T: InterfaceTracker>(
 fn grids<T: InterfaceTracker>(sim: &CoupledSim<T>) -> Result<Vec<u8>> {
     let solver = sim.solver();
     let grid = *solver.grid();
-    let mut field = sim.tracker().sample(&grid);
-    // φ = ∞ (no interface left) is stored as the grid's background, the domain diagonal.
-    let diagonal = grid.h * (grid.dims.iter().map(|&n| (n * n) as f64).sum::<f64>()).sqrt();
-    for p in &mut field.phi {
-        *p = p.min(diagonal);
-    }
+    let field = sim.tracker().sample(&grid);
     let mut out: Vec<VdbGrid> = phase_field_grids(&field).into();
     let velocity = solver
         .cell_velocities(&field, sim.phases())?

@@ -16,7 +16,7 @@ fn run_writes_frames_stats_and_resolved_scene() {
     for f in 0..=2 {
         let bytes = fs::read(out.join(format!("frames/{f:04}.ply"))).unwrap();
         let mesh = ply::read_ply(&bytes[..]).unwrap();
-        // Every frame keeps the shared invariants (DESIGN.md LabeledMesh contract).
+        // Every frame keeps the shared invariants (ARCHITECTURE.md "LabeledMesh").
         invariants::check(&mesh, 0.0).unwrap();
         assert!(!mesh.triangles.is_empty());
     }

@@ -1,6 +1,6 @@
-//! The coupled simulation (DESIGN.md `coupling/`, paper 004 §7.5): the solver's velocity
-//! advects the tracker, and the tracker's φ and χ, sampled at the solver's cells, give the
-//! per-phase density and viscosity of the next solver step. The tracker may run finer.
+//! The coupled simulation (ARCHITECTURE.md "One coupled step", paper 004 §7.5): the solver's
+//! velocity advects the tracker, and the tracker's φ and χ, sampled at the solver's cells, give
+//! the per-phase density and viscosity of the next solver step. The tracker may run finer.
 #![deny(unsafe_code)]
 
 pub mod diagnostics;

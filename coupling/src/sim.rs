@@ -183,20 +183,12 @@ impl<T: InterfaceTracker> CoupledSim<T> {
     ) -> Result<(), CouplingError> {
         let t0 = Instant::now();
         let grid = *self.solver.grid();
-        let mut field = match &self.pending {
+        let field = match &self.pending {
             Some(p) => self
                 .tracker
                 .sample_advected(&grid, p, p.start(), p.duration()),
             None => self.tracker.sample(&grid),
         };
-        // φ = ∞ means "no interface anywhere" (every other phase gone); any distance beyond
-        // the domain diagonal says the same to the solver, which needs finite values.
-        let far = grid.h * grid.dims.iter().sum::<usize>() as f64;
-        for p in &mut field.phi {
-            if *p == f64::INFINITY {
-                *p = far;
-            }
-        }
         report.add("sample", t0.elapsed().as_secs_f64());
         // The tracker's velocity reaches as far past each interface as the fluid may travel
         // before the tracker catches up, plus the interpolation stencil.

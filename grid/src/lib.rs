@@ -1,6 +1,6 @@
-//! The shared vocabulary between the interface tracker and the fluid solver (DESIGN.md
-//! "Data that flows"): phase ids, regular grids, the phase field the tracker hands to the
-//! solver, and the velocity field the solver (or an analytic flow) hands to the tracker.
+//! The shared vocabulary between the interface tracker and the fluid solver (ARCHITECTURE.md
+//! "Data between the parts"): phase ids, regular grids, the phase field the tracker hands to
+//! the solver, and the velocity field the solver (or an analytic flow) hands to the tracker.
 //! Kept tiny on purpose so that `tracker` and `solver` never depend on each other.
 #![deny(unsafe_code)]
 
@@ -46,6 +46,11 @@ impl GridSpec {
         self.origin + DVec3::new(i as f64, j as f64, k as f64) * self.h
     }
 
+    /// Length of the box's diagonal: no two points inside it are farther apart.
+    pub fn diagonal(&self) -> f64 {
+        (self.upper() - self.origin).length()
+    }
+
     /// Upper corner of the domain the grid covers.
     pub fn upper(&self) -> DVec3 {
         self.origin
@@ -58,7 +63,11 @@ impl GridSpec {
 }
 
 /// Unsigned distance φ to the nearest interface and phase id χ at the cell centres of `grid`:
-/// everything the solver knows of the interfaces (DESIGN.md "PhaseField").
+/// everything the solver knows of the interfaces (ARCHITECTURE.md "PhaseField").
+///
+/// φ is never infinite: where there is no interface at all (one phase fills the domain, a
+/// tracker answers φ = ∞), [`PhaseField::from_cell_centres`] stores [`GridSpec::diagonal`],
+/// farther than any interface inside the box could be; so φ ≤ the diagonal everywhere.
 #[derive(Clone, Debug)]
 pub struct PhaseField {
     pub grid: GridSpec,
@@ -69,14 +78,20 @@ pub struct PhaseField {
 impl PhaseField {
     /// φ, χ at every cell centre of `grid` from `f`, computed in parallel, stored in cell order
     /// (x fastest); each value depends only on its own cell, so any thread count gives the same.
+    /// Distances beyond the grid's diagonal (φ = ∞: no interface) are stored as the diagonal;
+    /// NaN is kept, for the solver's input check to name.
     pub fn from_cell_centres(
         grid: &GridSpec,
         f: impl Fn(DVec3) -> (f64, PhaseId) + Sync,
     ) -> PhaseField {
         let [nx, ny, _] = grid.dims;
+        let far = grid.diagonal();
         let (phi, chi) = (0..grid.cell_count())
             .into_par_iter()
-            .map(|c| f(grid.cell_center(c % nx, (c / nx) % ny, c / (nx * ny))))
+            .map(|c| {
+                let (d, p) = f(grid.cell_center(c % nx, (c / nx) % ny, c / (nx * ny)));
+                (if d > far { far } else { d }, p)
+            })
             .unzip();
         PhaseField {
             grid: *grid,
@@ -101,5 +116,28 @@ pub trait VelocityField: Sync {
         let k3 = self.velocity(x - 0.5 * dt * k2, t1 - 0.5 * dt);
         let k4 = self.velocity(x - dt * k3, t);
         x - dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_interface_reads_as_the_diagonal() {
+        let grid = GridSpec {
+            origin: DVec3::ZERO,
+            h: 0.5,
+            dims: [2, 4, 2],
+        };
+        // The box is 1 × 2 × 1: its diagonal is √6.
+        assert!((grid.diagonal() - 6f64.sqrt()).abs() < 1e-15);
+        let none = PhaseField::from_cell_centres(&grid, |_| (f64::INFINITY, 3));
+        assert!(none.phi.iter().all(|&d| d == grid.diagonal()));
+        assert!(none.chi.iter().all(|&c| c == 3));
+        let near = PhaseField::from_cell_centres(&grid, |x| (x.y, 0));
+        assert_eq!(near.phi[0], 0.25);
+        let bad = PhaseField::from_cell_centres(&grid, |_| (f64::NAN, 0));
+        assert!(bad.phi.iter().all(|d| d.is_nan()));
     }
 }

@@ -145,7 +145,7 @@ impl<'de> Deserialize<'de> for TrackerSpec {
     }
 }
 
-/// The interface tracker a scene runs with (DESIGN.md "InterfaceTracker").
+/// The interface tracker a scene runs with (ARCHITECTURE.md "The tracker contract").
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum TrackerKind {
@@ -229,10 +229,11 @@ pub enum VelocitySpec {
 #[serde(deny_unknown_fields)]
 pub struct SolverSpec {
     /// Solver cells along the longest domain axis; the tracker's `resolution` must be a whole
-    /// multiple of it (the tracker runs finer, DESIGN.md). Default: half the tracker's.
+    /// multiple of it (the tracker runs finer, ARCHITECTURE.md "PhaseField"). Default: half the
+    /// tracker's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub resolution: Option<i64>,
-    /// m/s²; DESIGN.md convention is −y.
+    /// m/s²; −y by convention (ARCHITECTURE.md "Conventions").
     #[serde(default = "default_gravity")]
     pub gravity: [f64; 3],
     /// Largest step as a fraction of h / (max speed) (solver CFL number).

@@ -1,5 +1,6 @@
-//! Scenes (DESIGN.md `scenes/`): the TOML format, validation with errors that name the
-//! problem and its place, initial shapes, analytic velocity fields and the built-in scenes.
+//! Scenes (ARCHITECTURE.md "The parts", `scenes/`): the TOML format, validation with errors
+//! that name the problem and its place, initial shapes, analytic velocity fields and the
+//! built-in scenes.
 #![deny(unsafe_code)]
 
 pub mod builtin;

@@ -97,7 +97,7 @@ pub struct SolverConfig {
     pub grid: GridSpec,
     /// Boundary condition per axis (x, y, z).
     pub boundaries: [AxisBoundary; 3],
-    /// Gravity (m/s²); DESIGN.md convention is −y.
+    /// Gravity (m/s²); −y by convention (ARCHITECTURE.md "Conventions").
     pub gravity: DVec3,
     /// Velocity advection scheme.
     pub advection: AdvectionScheme,

@@ -1,9 +1,9 @@
-//! MAC-grid incompressible multiphase solver (DESIGN.md "The solver"): semi-Lagrangian /
-//! MacCormack advection, gravity and body forces, implicit variable viscosity in full stress
-//! form, and a variable-density pressure projection with ghost-fluid face densities, on a
-//! staggered grid with free-slip / no-slip / periodic boundaries and static solids. Linear
-//! systems are solved by CG with MIC(0) or geometric-multigrid preconditioning, in parallel and
-//! bit-deterministically.
+//! MAC-grid incompressible multiphase solver (ARCHITECTURE.md "Inside Solver::step"):
+//! semi-Lagrangian / MacCormack advection, gravity and body forces, implicit variable viscosity
+//! in full stress form, and a variable-density pressure projection with ghost-fluid face
+//! densities, on a staggered grid with free-slip / no-slip / periodic boundaries and static
+//! solids. Linear systems are solved by CG with MIC(0) or geometric-multigrid preconditioning,
+//! in parallel and bit-deterministically.
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 

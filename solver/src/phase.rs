@@ -1,13 +1,13 @@
 //! Per-phase material properties, their validation against a [`PhaseField`], and the
 //! sharp (ghost-fluid) face densities of the MAC grid.
 //!
-//! Face density (DESIGN.md "The solver", Liu–Fedkiw–Kang ghost-fluid method): on a face whose
-//! two cells a, b hold different phases, the interface crosses the face's segment at fraction
-//! θ = φ_a/(φ_a+φ_b) from a (φ is the unsigned distance at the centres). With the pressure
-//! continuous and the normal flux (1/ρ)∂p/∂n continuous across it, the two half-segments act
-//! in series: flux = (p_b − p_a)/(h·(θ ρ_a + (1−θ) ρ_b)), so ρ_face = θ ρ_a + (1−θ) ρ_b. This is
-//! exact for layered 1D states, so stratified fluids at rest stay at rest (the hydrostatic
-//! pressure is then the discrete solution to round-off).
+//! Face density (ARCHITECTURE.md "Inside Solver::step", Liu–Fedkiw–Kang ghost-fluid method):
+//! on a face whose two cells a, b hold different phases, the interface crosses the face's
+//! segment at fraction θ = φ_a/(φ_a+φ_b) from a (φ is the unsigned distance at the centres).
+//! With the pressure continuous and the normal flux (1/ρ)∂p/∂n continuous across it, the two
+//! half-segments act in series: flux = (p_b − p_a)/(h·(θ ρ_a + (1−θ) ρ_b)), so
+//! ρ_face = θ ρ_a + (1−θ) ρ_b. This is exact for layered 1D states, so stratified fluids at
+//! rest stay at rest (the hydrostatic pressure is then the discrete solution to round-off).
 
 use crate::error::SolverError;
 use crate::layout::{idx, unidx, Layout};

@@ -1,6 +1,6 @@
 //! The public solver: owns the MAC velocity and the static solid fractions, and advances them
-//! one step at a time (DESIGN.md "The solver"): advect, body forces, implicit viscosity,
-//! variable-density projection. A failed step leaves the state untouched.
+//! one step at a time (ARCHITECTURE.md "Inside Solver::step"): advect, body forces, implicit
+//! viscosity, variable-density projection. A failed step leaves the state untouched.
 
 use crate::advect::advect_by_phase;
 use crate::config::{AxisBoundary, SolverConfig};

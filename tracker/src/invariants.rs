@@ -1,6 +1,6 @@
-//! Structural invariants of a [`LabeledMesh`] (DESIGN.md "Contracts"): valid indices, finite
-//! coordinates, two different labels per triangle, no degenerate triangle, and every phase
-//! region bounded by a closed, consistently oriented surface.
+//! Structural invariants of a [`LabeledMesh`] (ARCHITECTURE.md "LabeledMesh"): valid indices,
+//! finite coordinates, two different labels per triangle, no degenerate triangle, and every
+//! phase region bounded by a closed, consistently oriented surface.
 
 use crate::mesh::LabeledMesh;
 use glam::DVec3;

@@ -1,4 +1,4 @@
-//! Multiphase interface tracking (DESIGN.md `tracker/`).
+//! Multiphase interface tracking (ARCHITECTURE.md "The parts", `tracker/`).
 #![deny(unsafe_code)]
 
 pub mod contour;

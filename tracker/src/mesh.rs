@@ -1,4 +1,5 @@
-//! The labeled non-manifold triangle mesh shared by every tracker (DESIGN.md "LabeledMesh").
+//! The labeled non-manifold triangle mesh shared by every tracker (ARCHITECTURE.md
+//! "LabeledMesh").
 
 use glam::DVec3;
 use polyphase_grid::{PhaseId, OUTSIDE};

@@ -1,4 +1,5 @@
-//! Interface metrics comparing meshes (DESIGN.md `tracker/`: Hausdorff distance).
+//! Interface metrics comparing meshes (ARCHITECTURE.md "The parts", `tracker/`: Hausdorff
+//! distance).
 
 use crate::mesh::LabeledMesh;
 use crate::query::MeshQuery;

@@ -1,6 +1,6 @@
-//! Binary little-endian PLY for labeled meshes (DESIGN.md "Output of a run": `frames/NNNN.ply`).
-//! One fixed layout, written and read exactly: per vertex `double x, y, z`; per face a
-//! `uchar`-counted `uint` index list (always 3) and `ushort front, back` labels.
+//! Binary little-endian PLY for labeled meshes (ARCHITECTURE.md "Output folder":
+//! `frames/NNNN.ply`). One fixed layout, written and read exactly: per vertex `double x, y, z`;
+//! per face a `uchar`-counted `uint` index list (always 3) and `ushort front, back` labels.
 
 use crate::mesh::LabeledMesh;
 use glam::DVec3;

@@ -1,5 +1,5 @@
-//! The interface every tracker implements (DESIGN.md "InterfaceTracker"), so each scene can
-//! choose its tracker and every tracker test can run on all of them.
+//! The interface every tracker implements (ARCHITECTURE.md "The tracker contract"), so each
+//! scene can choose its tracker and every tracker test can run on all of them.
 
 use glam::DVec3;
 use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField};

@@ -5,11 +5,11 @@ use super::VdbGrid;
 use crate::{GridSpec, PhaseField, VelocityField, OUTSIDE};
 
 /// Grids "phi" (unsigned distance to the nearest interface) and "chi" (phase id as a
-/// float) of `field`. φ's background is the domain diagonal, farther than any
-/// interface inside the domain; χ's is [`OUTSIDE`], the pseudo-phase beyond the
-/// domain boundary. Both are therefore active at every cell in practice.
+/// float) of `field`. φ's background is the domain diagonal, the value a [`PhaseField`]
+/// holds where there is no interface; χ's is [`OUTSIDE`], the pseudo-phase beyond the
+/// domain boundary.
 pub fn phase_field_grids(field: &PhaseField) -> [VdbGrid; 2] {
-    let diagonal = (field.grid.upper() - field.grid.origin).length() as f32;
+    let diagonal = field.grid.diagonal() as f32;
     let phi = field.phi.iter().map(|&d| d as f32).collect();
     let chi = field.chi.iter().map(|&c| f32::from(c)).collect();
     [
