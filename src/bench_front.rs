@@ -6,9 +6,9 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use polyphase_coupling::build_tracker;
 use polyphase_scenes::{Scene, TrackerKind};
-use polyphase_tracker::front::front_tracker::FrontTracker;
-use polyphase_tracker::{metrics, ContourTracker, InterfaceTracker};
+use polyphase_tracker::{metrics, InterfaceTracker};
 
 /// One tracker's run over the scene.
 struct Row {
@@ -42,29 +42,13 @@ pub fn run(
         let contour = base.with_overrides(Some(r), None)?;
         let front = contour.with_tracker(TrackerKind::Front)?;
         let mut rows = Vec::new();
-        if wanted(TrackerKind::Contour) {
-            eprintln!("{} {r}³: contouring tracker", contour.file.name);
-            let (mut tracker, _) = ContourTracker::new(
-                contour.grid,
-                &|x| contour.initial.sample(x),
-                contour.file.phases.len(),
-                contour.initial.background,
-            );
-            tracker.set_volume_targets(contour.volume_targets());
-            rows.push(measure(&contour, "contour", tracker, steps)?);
-        }
-        if wanted(TrackerKind::Front) {
-            eprintln!("{} {r}³: front tracker", front.file.name);
-            let params = front.file.tracker.front.clone().unwrap_or_default();
-            let tracker = FrontTracker::from_sampler(
-                front.grid,
-                &|x| front.initial.sample(x),
-                front.file.phases.len(),
-                front.initial.background,
-                params,
-            )
-            .context("starting the front tracker")?;
-            rows.push(measure(&front, "front", tracker, steps)?);
+        for (scene, name) in [(&contour, "contour"), (&front, "front")] {
+            if !wanted(scene.file.tracker.kind) {
+                continue;
+            }
+            eprintln!("{} {r}³: {name} tracker", scene.file.name);
+            let (tracker, _) = build_tracker(scene, None)?;
+            rows.push(measure(scene, name, tracker, steps)?);
         }
         let _ = writeln!(
             out,

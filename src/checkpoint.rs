@@ -1,12 +1,13 @@
 //! The checkpoint a run writes at every frame end (`DIR/checkpoint.bin`), from which
-//! `polyphase resume` continues bit for bit: the tracker's mesh, redistanced tree, volume
-//! targets and carried volume loss, the solver's state, time and step count as exact f64
+//! `polyphase resume` continues bit for bit: the tracker's snapshot (for the contouring
+//! tracker its mesh, redistanced tree, volume targets and carried volume loss; the body layout
+//! is the same as before snapshots existed), the solver's state, time and step count as exact f64
 //! bits, plus the run's running totals for the summary. Little-endian binary: magic, format version, body, FNV-1a checksum of all
 //! bytes before it, so a truncated or damaged file is refused rather than half-read.
 
 use anyhow::{bail, ensure, Context, Result};
 use polyphase_solver::SolverState;
-use polyphase_tracker::{ply, LabeledMesh, MdTree};
+use polyphase_tracker::{ply, MdTree, TrackerSnapshot};
 
 /// File name inside the run folder.
 pub const FILE: &str = "checkpoint.bin";
@@ -38,14 +39,8 @@ pub struct Checkpoint {
     pub time: f64,
     /// Steps taken (coupled steps, or tracker steps of a passive run).
     pub steps: usize,
-    /// The tracker's interfaces.
-    pub mesh: LabeledMesh,
-    /// The tracker's redistanced tree (it answers φ, χ away from the interface).
-    pub tree: MdTree,
-    /// The tracker's volume-correction targets.
-    pub volume_targets: Option<Vec<f64>>,
-    /// The tracker's carried volume loss (per phase, added to the next step's targets).
-    pub carried_loss: Vec<f64>,
+    /// The tracker's state ([`InterfaceTracker::snapshot`]).
+    pub tracker: TrackerSnapshot,
     /// The solver's state; `None` for a passive run.
     pub solver: Option<SolverState>,
     /// Totals for the summary.
@@ -60,26 +55,6 @@ pub fn scene_hash(bytes: &[u8]) -> u64 {
     })
 }
 
-/// The contouring tracker a checkpoint saved (its mesh, tree and volume-correction state),
-/// rebuilt for the run's `scene`.
-pub fn restore_contour(
-    scene: &polyphase_scenes::Scene,
-    mesh: LabeledMesh,
-    tree: MdTree,
-    volume_targets: Option<Vec<f64>>,
-    carried_loss: Vec<f64>,
-) -> polyphase_tracker::ContourTracker {
-    polyphase_tracker::ContourTracker::from_parts(
-        scene.grid,
-        mesh,
-        tree,
-        scene.file.phases.len(),
-        scene.initial.background,
-        volume_targets,
-        carried_loss,
-    )
-}
-
 impl Checkpoint {
     /// The file's bytes.
     pub fn encode(&self) -> Result<Vec<u8>> {
@@ -90,15 +65,24 @@ impl Checkpoint {
         put_u64(&mut w, self.frame as u64);
         put_f64(&mut w, self.time);
         put_u64(&mut w, self.steps as u64);
-        let mut mesh = Vec::new();
-        ply::write_ply(&self.mesh, &mut mesh)?;
-        put_u64(&mut w, mesh.len() as u64);
-        w.extend_from_slice(&mesh);
-        let tree = self.tree.to_bytes();
-        put_u64(&mut w, tree.len() as u64);
-        w.extend_from_slice(&tree);
-        put_option(&mut w, self.volume_targets.as_deref(), put_f64s);
-        put_f64s(&mut w, &self.carried_loss);
+        match &self.tracker {
+            TrackerSnapshot::Contour {
+                mesh,
+                tree,
+                volume_targets,
+                carried_loss,
+            } => {
+                let mut bytes = Vec::new();
+                ply::write_ply(mesh, &mut bytes)?;
+                put_u64(&mut w, bytes.len() as u64);
+                w.extend_from_slice(&bytes);
+                let tree = tree.to_bytes();
+                put_u64(&mut w, tree.len() as u64);
+                w.extend_from_slice(&tree);
+                put_option(&mut w, volume_targets.as_deref(), put_f64s);
+                put_f64s(&mut w, carried_loss);
+            }
+        }
         put_option(&mut w, self.solver.as_ref(), |w, s| {
             put_f64(w, s.time);
             s.velocity.iter().for_each(|c| put_f64s(w, c));
@@ -179,10 +163,12 @@ impl Checkpoint {
             frame,
             time,
             steps,
-            mesh,
-            tree,
-            volume_targets,
-            carried_loss,
+            tracker: TrackerSnapshot::Contour {
+                mesh,
+                tree,
+                volume_targets,
+                carried_loss,
+            },
             solver,
             totals: Totals {
                 wall,
@@ -282,7 +268,7 @@ impl<'a> Reader<'a> {
 mod tests {
     use super::*;
     use glam::DVec3;
-    use polyphase_tracker::{GridSpec, PhaseId};
+    use polyphase_tracker::{GridSpec, LabeledMesh, PhaseId};
 
     fn sample() -> Checkpoint {
         let grid = GridSpec {
@@ -299,14 +285,16 @@ mod tests {
             frame: 3,
             time: 0.1 + 0.2,
             steps: 17,
-            mesh: LabeledMesh {
-                vertices: vec![DVec3::new(0.1, 0.2, 0.3), DVec3::X, DVec3::Y],
-                triangles: vec![[0, 1, 2]],
-                labels: vec![[1, 0]],
+            tracker: TrackerSnapshot::Contour {
+                mesh: LabeledMesh {
+                    vertices: vec![DVec3::new(0.1, 0.2, 0.3), DVec3::X, DVec3::Y],
+                    triangles: vec![[0, 1, 2]],
+                    labels: vec![[1, 0]],
+                },
+                tree: MdTree::build(&grid, &ball),
+                volume_targets: Some(vec![1.0 / 3.0, 2.0 / 3.0]),
+                carried_loss: vec![0.0, -1e-7 / 3.0],
             },
-            tree: MdTree::build(&grid, &ball),
-            volume_targets: Some(vec![1.0 / 3.0, 2.0 / 3.0]),
-            carried_loss: vec![0.0, -1e-7 / 3.0],
             solver: Some(SolverState {
                 time: 0.3000000000000001,
                 velocity: [vec![1e-300, -0.0], vec![f64::MIN_POSITIVE], vec![]],
@@ -330,10 +318,9 @@ mod tests {
         let back = Checkpoint::decode(&bytes).unwrap();
         // Every field is written as its exact bits, so equal bytes mean an exact copy.
         assert_eq!(back.encode().unwrap(), bytes);
-        assert_eq!(back.mesh, c.mesh);
+        assert_eq!(back.tracker.mesh(), c.tracker.mesh());
         assert_eq!(back.solver, c.solver);
         assert_eq!(back.totals, c.totals);
-        assert_eq!(back.carried_loss, c.carried_loss);
         // PartialEq on f64 would accept 0.0 for -0.0: compare the bits of the signed zero too.
         let v = &back.solver.as_ref().unwrap().velocity[0];
         assert_eq!(v[1].to_bits(), (-0.0f64).to_bits());

@@ -36,15 +36,6 @@ pub fn run(opts: &RunOptions) -> Result<PathBuf> {
         Some(kind) => scene.with_tracker(kind)?,
         None => scene,
     };
-    // Measured: on `dambreak_column` the front lost 28 % of the water in 10 frames. Liquid
-    // reaching a wall or another liquid is stopped by collision handling until topology
-    // changes (T1/T2, merging) let it merge, while the flow behind it keeps coming.
-    anyhow::ensure!(
-        scene.file.tracker.kind == TrackerKind::Contour || !scene.is_coupled(),
-        "{}: the front tracker runs passive scenes only until it can merge interfaces \
-         (topology changes); use tracker = \"contour\" for coupled scenes",
-        opts.scene
-    );
     let root = opts
         .out
         .clone()
@@ -69,15 +60,11 @@ pub fn resume(dir: &Path) -> Result<()> {
     let toml = fs::read_to_string(&scene_path)
         .with_context(|| format!("{} is not a run folder (no scene.toml)", dir.display()))?;
     let scene = Scene::parse(&toml, &scene_path.display().to_string())?;
-    anyhow::ensure!(
-        scene.file.tracker.kind == TrackerKind::Contour,
-        "{}: only contouring-tracker runs can be resumed (front runs keep no checkpoint)",
-        scene_path.display()
-    );
     let folder = RunFolder::open(dir);
     let checkpoint = folder.read_checkpoint()?.with_context(|| {
         format!(
-            "{} has no checkpoint (the run stopped before its first frame): start it again",
+            "{} has no checkpoint: the run stopped before its first frame, or its tracker keeps \
+             none (only contouring-tracker runs can be resumed); start it again",
             dir.display()
         )
     })?;

@@ -1,28 +1,28 @@
 //! `polyphase run` for a coupled scene: the solver's velocity moves the tracker (paper 004
-//! §7.5); frames, stats with per-stage timings, solver iterations and scene diagnostics, and
-//! with the contouring tracker a checkpoint (tracker mesh and tree, solver state) at every
-//! frame end.
+//! §7.5); frames, stats with per-stage timings, solver iterations and the scene's
+//! measurements, and, when the tracker has a snapshot, a checkpoint (tracker snapshot, solver
+//! state) at every frame end.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use polyphase_coupling::{CoupledSim, FrameReport};
+use polyphase_coupling::{build_tracker, AnyTracker, CoupledSim, FrameReport};
 use polyphase_grid::vdb::{encode, phase_field_grids, Compression, VdbGrid};
 use polyphase_scenes::Scene;
-use polyphase_tracker::{ContourTracker, InterfaceTracker, StepStats};
+use polyphase_tracker::{InterfaceTracker, StepStats};
 use serde_json::{json, Value};
 
-use crate::checkpoint::{restore_contour, Checkpoint, Totals};
+use crate::checkpoint::{Checkpoint, Totals};
 use crate::measurements::add_measurements;
 use crate::output::RunFolder;
 use crate::run::{progress, Progress, Start};
 use crate::summary::Summary;
 
 /// Runs a validated coupled scene into `root` (already checked to be writable by `folder`),
-/// from frame 0 or from a checkpoint, with the contouring tracker ([`crate::run::run`]
-/// refuses the front tracker on coupled scenes).
+/// from frame 0 or from a checkpoint, with the scene's tracker (scene validation refuses the
+/// front tracker on coupled scenes until it can merge interfaces).
 pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path, start: Start) -> Result<()> {
     let (sim, hash, progress_at, prior) = match start {
         Start::Fresh(hash) => {
@@ -31,7 +31,7 @@ pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path, start: Start)
         }
         Start::Resume(c) => {
             let c = *c;
-            let tracker = restore_contour(scene, c.mesh, c.tree, c.volume_targets, c.carried_loss);
+            let (tracker, _) = build_tracker(scene, Some(c.tracker))?;
             let mut sim = polyphase_coupling::with_tracker(scene, tracker)?;
             let solver = c
                 .solver
@@ -40,16 +40,17 @@ pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path, start: Start)
             (sim, c.scene_hash, Progress::After(c.frame), c.totals)
         }
     };
-    let save = |frame: usize, sim: &CoupledSim<ContourTracker>, totals: Totals| {
+    // A tracker without a snapshot keeps no checkpoint; its runs cannot be resumed.
+    let save = |frame: usize, sim: &CoupledSim<AnyTracker>, totals: Totals| {
+        let Some(snapshot) = sim.tracker().snapshot() else {
+            return Ok(());
+        };
         folder.write_checkpoint(&Checkpoint {
             scene_hash: hash,
             frame,
             time: sim.time(),
             steps: sim.steps(),
-            mesh: sim.tracker().mesh().clone(),
-            tree: sim.tracker().tree().clone(),
-            volume_targets: sim.tracker().volume_targets().map(<[f64]>::to_vec),
-            carried_loss: sim.tracker().carried_loss().to_vec(),
+            tracker: snapshot,
             solver: Some(sim.solver().state()),
             totals,
         })

@@ -1,17 +1,18 @@
-//! Passive runs: a scene's analytic velocity moves the interfaces, frame by frame, with either
-//! tracker. Contouring runs write a checkpoint at every frame end (`polyphase resume`).
+//! Passive runs: a scene's analytic velocity moves the interfaces, frame by frame, with the
+//! tracker the scene asks for. Runs of a tracker that has a snapshot (the contouring tracker)
+//! write a checkpoint at every frame end (`polyphase resume`).
 
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use polyphase_scenes::{Scene, TrackerKind};
-use polyphase_tracker::front::front_tracker::FrontTracker;
-use polyphase_tracker::{metrics, ContourTracker, InterfaceTracker, LabeledMesh, StepStats};
+use polyphase_coupling::{build_tracker, AnyTracker};
+use polyphase_scenes::Scene;
+use polyphase_tracker::{metrics, InterfaceTracker, LabeledMesh, StepStats};
 use serde_json::{json, Value};
 
-use crate::checkpoint::{restore_contour, Checkpoint, Totals};
+use crate::checkpoint::{Checkpoint, Totals};
 use crate::measurements::add_measurements;
 use crate::output::RunFolder;
 use crate::run::{progress, Progress, Start};
@@ -31,32 +32,15 @@ pub fn run_passive(scene: &Scene, folder: &RunFolder, root: &Path, start: Start)
         scene.file.tracker.kind,
         root.display()
     );
-    match scene.file.tracker.kind {
-        TrackerKind::Contour => run_contour(scene, folder, start),
-        TrackerKind::Front => run_front(scene, folder),
-    }
-}
-
-/// The contouring tracker's first state: its mesh and the stats of building it.
-fn first_contour(scene: &Scene) -> (ContourTracker, StepStats) {
-    let initial = |x| scene.initial.sample(x);
-    let n_phases = scene.file.phases.len();
-    let (mut tracker, first) =
-        ContourTracker::new(scene.grid, &initial, n_phases, scene.initial.background);
-    tracker.set_volume_targets(scene.volume_targets());
-    (tracker, first)
-}
-
-fn run_contour(scene: &Scene, folder: &RunFolder, start: Start) -> Result<()> {
     let steps = scene.steps_per_frame();
     let (tracker, hash, done, prior) = match start {
         Start::Fresh(hash) => {
-            let (tracker, first) = first_contour(scene);
+            let (tracker, first) = build_tracker(scene, None)?;
             (tracker, hash, Progress::Fresh(first), Totals::default())
         }
         Start::Resume(c) => {
             let c = *c;
-            let tracker = restore_contour(scene, c.mesh, c.tree, c.volume_targets, c.carried_loss);
+            let (tracker, _) = build_tracker(scene, Some(c.tracker))?;
             (tracker, c.scene_hash, Progress::After(c.frame), c.totals)
         }
     };
@@ -65,18 +49,19 @@ fn run_contour(scene: &Scene, folder: &RunFolder, start: Start) -> Result<()> {
     let initial_mesh = match done {
         _ if !scene.file.time.periodic => None,
         Progress::Fresh(_) => Some(tracker.mesh().clone()),
-        Progress::After(_) => Some(first_contour(scene).0.mesh().clone()),
+        Progress::After(_) => Some(build_tracker(scene, None)?.0.mesh().clone()),
     };
-    let save = |frame: usize, tracker: &ContourTracker, summary: &Summary, wall: f64| {
+    // A tracker without a snapshot keeps no checkpoint; its runs cannot be resumed.
+    let save = |frame: usize, tracker: &AnyTracker, summary: &Summary, wall: f64| {
+        let Some(snapshot) = tracker.snapshot() else {
+            return Ok(());
+        };
         folder.write_checkpoint(&Checkpoint {
             scene_hash: hash,
             frame,
             time: frame as f64 * scene.frame_dt(),
             steps: frame * steps,
-            mesh: tracker.mesh().clone(),
-            tree: tracker.tree().clone(),
-            volume_targets: tracker.volume_targets().map(<[f64]>::to_vec),
-            carried_loss: tracker.carried_loss().to_vec(),
+            tracker: snapshot,
             solver: None,
             totals: Totals {
                 wall,
@@ -91,36 +76,6 @@ fn run_contour(scene: &Scene, folder: &RunFolder, start: Start) -> Result<()> {
         tracker,
         done,
         prior,
-        initial_mesh.as_ref(),
-        save,
-    )
-}
-
-fn run_front(scene: &Scene, folder: &RunFolder) -> Result<()> {
-    let initial = |x| scene.initial.sample(x);
-    let params = scene.file.tracker.front.clone().unwrap_or_default();
-    let started = Instant::now();
-    let tracker = FrontTracker::from_sampler(
-        scene.grid,
-        &initial,
-        scene.file.phases.len(),
-        scene.initial.background,
-        params,
-    )
-    .with_context(|| format!("{}: starting the front tracker", scene.file.name))?;
-    let first = StepStats {
-        stages: vec![("build", started.elapsed().as_secs_f64())],
-        ..StepStats::default()
-    };
-    let initial_mesh = scene.file.time.periodic.then(|| tracker.mesh().clone());
-    // Front runs keep no checkpoint: `resume` is for contouring runs.
-    let save = |_: usize, _: &FrontTracker, _: &Summary, _: f64| Ok(());
-    track(
-        scene,
-        folder,
-        tracker,
-        Progress::Fresh(first),
-        Totals::default(),
         initial_mesh.as_ref(),
         save,
     )

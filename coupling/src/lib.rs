@@ -13,5 +13,5 @@ pub mod sim;
 pub use diagnostics::{interface_extent, measure, pieces, Measured, Piece};
 pub use error::CouplingError;
 pub use rt_theory::RtLinear;
-pub use setup::{from_scene, with_tracker};
+pub use setup::{build_tracker, from_scene, with_tracker, AnyTracker};
 pub use sim::{interface_lag, CoupledSim, FrameReport, TimeControl};

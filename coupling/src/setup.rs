@@ -1,34 +1,96 @@
-//! Builds a coupled simulation from a validated coupled scene.
+//! Builds trackers and coupled simulations from validated scenes.
+
+use std::time::Instant;
 
 use glam::DVec3;
-use polyphase_scenes::{PreconditionerSpec, Scene};
+use polyphase_scenes::{PreconditionerSpec, Scene, TrackerKind};
 use polyphase_solver::{
     LinearSolverSettings, PhaseProps, PreconditionerKind, Solver, SolverConfig,
 };
-use polyphase_tracker::{ContourTracker, InterfaceTracker, StepStats};
+use polyphase_tracker::front::front_tracker::FrontTracker;
+use polyphase_tracker::{ContourTracker, InterfaceTracker, StepStats, TrackerSnapshot};
 
 use crate::error::CouplingError;
 use crate::sim::{CoupledSim, TimeControl};
 
-/// Solver (free-slip closed box at the scene's solver resolution, at rest) and contour
-/// tracker (the scene's resolution, exact initial shapes) for a coupled scene, plus the
-/// tracker's first-build stats.
-pub fn from_scene(scene: &Scene) -> Result<(CoupledSim<ContourTracker>, StepStats), CouplingError> {
-    let (solver, phases, control) = solver_parts(scene)?;
+/// Whichever tracker a scene asked for.
+pub type AnyTracker = Box<dyn InterfaceTracker>;
+
+/// The tracker of `scene`, built from its exact initial shapes with the stats of that build, or
+/// restored from `snapshot` (a checkpoint: then the stats are empty). The only place that
+/// turns the scene's tracker kind into a tracker; everything after it sees only
+/// [`InterfaceTracker`]. A snapshot of another kind than the scene's is an error.
+pub fn build_tracker(
+    scene: &Scene,
+    snapshot: Option<TrackerSnapshot>,
+) -> Result<(AnyTracker, StepStats), CouplingError> {
     let initial = |x| scene.initial.sample(x);
-    let (mut tracker, first) = ContourTracker::new(
-        scene.grid,
-        &initial,
-        scene.file.phases.len(),
-        scene.initial.background,
-    );
-    tracker.set_volume_targets(scene.volume_targets());
+    let n_phases = scene.file.phases.len();
+    let background = scene.initial.background;
+    match (scene.file.tracker.kind, snapshot) {
+        (TrackerKind::Contour, None) => {
+            let (mut tracker, first) =
+                ContourTracker::new(scene.grid, &initial, n_phases, background);
+            tracker.set_volume_targets(scene.volume_targets());
+            Ok((Box::new(tracker), first))
+        }
+        (
+            TrackerKind::Contour,
+            Some(TrackerSnapshot::Contour {
+                mesh,
+                tree,
+                volume_targets,
+                carried_loss,
+            }),
+        ) => {
+            let tracker = ContourTracker::from_parts(
+                scene.grid,
+                mesh,
+                tree,
+                n_phases,
+                background,
+                volume_targets,
+                carried_loss,
+            );
+            Ok((Box::new(tracker), StepStats::default()))
+        }
+        (TrackerKind::Front, None) => {
+            let started = Instant::now();
+            let params = scene.file.tracker.front.clone().unwrap_or_default();
+            let tracker =
+                FrontTracker::from_sampler(scene.grid, &initial, n_phases, background, params)
+                    .map_err(|e| {
+                        CouplingError::Invalid(format!(
+                            "{}: starting the front tracker: {e}",
+                            scene.file.name
+                        ))
+                    })?;
+            let first = StepStats {
+                stages: vec![("build", started.elapsed().as_secs_f64())],
+                ..StepStats::default()
+            };
+            Ok((Box::new(tracker), first))
+        }
+        (TrackerKind::Front, Some(_)) => Err(CouplingError::Invalid(format!(
+            "{}: the checkpoint holds a contouring tracker, but the scene asks for the front \
+             tracker",
+            scene.file.name
+        ))),
+    }
+}
+
+/// Solver (free-slip closed box at the scene's solver resolution, at rest) and the scene's
+/// tracker (built by [`build_tracker`]) for a coupled scene, plus the tracker's first-build
+/// stats.
+pub fn from_scene(scene: &Scene) -> Result<(CoupledSim<AnyTracker>, StepStats), CouplingError> {
+    let (solver, phases, control) = solver_parts(scene)?;
+    let (tracker, first) = build_tracker(scene, None)?;
     Ok((CoupledSim::new(solver, tracker, phases, control)?, first))
 }
 
-/// The coupled simulation of a coupled scene around a given tracker (a front tracker, or a
-/// contouring tracker restored from a checkpoint), with the solver at rest at time 0 until it
-/// is restored too.
+/// The coupled simulation of a coupled scene around a given tracker (one restored from a
+/// checkpoint, or one a test built), with the solver at rest at time 0 until it is restored
+/// too.
 pub fn with_tracker<T: InterfaceTracker>(
     scene: &Scene,
     tracker: T,

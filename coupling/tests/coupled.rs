@@ -1,9 +1,11 @@
 //! Coupled runs at low resolution: Rayleigh–Taylor growth against linear theory, volume
 //! conservation, determinism across thread counts.
 
-use polyphase_coupling::{from_scene, interface_extent, CoupledSim, Measured, RtLinear};
+use polyphase_coupling::{
+    from_scene, interface_extent, AnyTracker, CoupledSim, Measured, RtLinear,
+};
 use polyphase_scenes::{builtin, Scene};
-use polyphase_tracker::{ContourTracker, InterfaceTracker};
+use polyphase_tracker::InterfaceTracker;
 
 fn builtin_text(name: &str) -> &'static str {
     polyphase_scenes::BUILTIN
@@ -14,7 +16,7 @@ fn builtin_text(name: &str) -> &'static str {
 }
 
 /// Half the bubble-to-spike distance: the perturbation amplitude.
-fn amplitude(sim: &CoupledSim<ContourTracker>) -> f64 {
+fn amplitude(sim: &CoupledSim<AnyTracker>) -> f64 {
     let (spike, bubble) = interface_extent(sim.tracker().mesh(), 0, Some(1), 1).unwrap();
     0.5 * (bubble - spike)
 }
@@ -95,7 +97,7 @@ fn rayleigh_taylor_growth_at_the_default_tracker_cfl() {
 }
 
 /// The water column at low resolution, run to `end`.
-fn column(resolution: i64, end: f64) -> CoupledSim<ContourTracker> {
+fn column(resolution: i64, end: f64) -> CoupledSim<AnyTracker> {
     let scene = builtin("dambreak_column")
         .unwrap()
         .unwrap()

@@ -2,9 +2,9 @@
 //! interface), moves with g·t, and the solver's interface never lags the tracker's.
 
 use glam::DVec3;
-use polyphase_coupling::{from_scene, CoupledSim};
+use polyphase_coupling::{from_scene, AnyTracker, CoupledSim};
 use polyphase_scenes::Scene;
-use polyphase_tracker::{ContourTracker, InterfaceTracker, LabeledMesh, PhaseId};
+use polyphase_tracker::{InterfaceTracker, LabeledMesh, PhaseId};
 
 const WATER: PhaseId = 1;
 
@@ -45,7 +45,7 @@ fn roundness_error(mesh: &LabeledMesh) -> f64 {
 }
 
 /// Largest |v − g·t| / |g·t| over the solver cells the water fills.
-fn velocity_error(sim: &CoupledSim<ContourTracker>) -> f64 {
+fn velocity_error(sim: &CoupledSim<AnyTracker>) -> f64 {
     let grid = *sim.solver().grid();
     let field = sim.tracker().sample(&grid);
     let v = sim.solver().cell_velocities(&field, sim.phases()).unwrap();

@@ -91,6 +91,17 @@ impl Scene {
         }
         let velocity = compile_velocity(&file.velocity, &bad)?;
         let ratio = check_solver(&mut file, &bad)?;
+        // Measured: on `dambreak_column` the front tracker lost 28 % of the water in 10 frames.
+        // Liquid reaching a wall or another liquid is stopped by collision handling until
+        // topology changes (T1/T2, merging) let it merge, while the flow behind it keeps coming.
+        if ratio.is_some() && file.tracker.kind == TrackerKind::Front {
+            return Err(bad(
+                "tracker",
+                "the front tracker runs passive scenes only until it can merge interfaces \
+                 (topology changes); use tracker = \"contour\" for coupled scenes"
+                    .into(),
+            ));
+        }
         let phases = compile_phases(&file, &bad)?;
         let find = |name: &str, place: &str| -> Result<PhaseId, SceneError> {
             phases

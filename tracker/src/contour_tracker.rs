@@ -11,6 +11,7 @@ use polyphase_grid::{GridSpec, PhaseId, VelocityField};
 use crate::contour::{MdTree, PhaseSampler};
 use crate::mesh::LabeledMesh;
 use crate::query::MeshQuery;
+use crate::snapshot::TrackerSnapshot;
 use crate::tracker::departure_point;
 use crate::tracker::{InterfaceTracker, StepStats, TrackerError};
 use crate::volume_correction::{carried_loss, first_aim, missed, reaim, VolumeShift, MAX_RETRIES};
@@ -252,6 +253,15 @@ impl InterfaceTracker for ContourTracker {
 
     fn mesh(&self) -> &LabeledMesh {
         &self.mesh
+    }
+
+    fn snapshot(&self) -> Option<TrackerSnapshot> {
+        Some(TrackerSnapshot::Contour {
+            mesh: self.mesh.clone(),
+            tree: self.tree.clone(),
+            volume_targets: self.volume_targets.clone(),
+            carried_loss: self.carried_loss.clone(),
+        })
     }
 
     fn phase_volumes(&self) -> Vec<f64> {

@@ -11,6 +11,7 @@ pub mod ply;
 pub mod query;
 pub mod redistance;
 pub mod sampling;
+pub mod snapshot;
 pub mod tracker;
 pub mod volume_correction;
 
@@ -21,4 +22,5 @@ pub use mesh::LabeledMesh;
 pub use ply::{read_ply, write_ply, PlyError};
 pub use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField, OUTSIDE};
 pub use query::{MeshQuery, Nearest};
+pub use snapshot::TrackerSnapshot;
 pub use tracker::{departure_point, InterfaceTracker, StepStats, TrackerError};

@@ -6,6 +6,7 @@ use polyphase_grid::{GridSpec, PhaseField, PhaseId, VelocityField};
 use thiserror::Error;
 
 use crate::mesh::LabeledMesh;
+use crate::snapshot::TrackerSnapshot;
 
 /// Wall time of each stage of one step, and the sizes that explain it.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -57,8 +58,49 @@ pub trait InterfaceTracker: Send + Sync {
     }
     /// The current interface mesh, closed at the domain boundary.
     fn mesh(&self) -> &LabeledMesh;
+    /// The whole state for a checkpoint; `None` for a tracker whose runs cannot be resumed
+    /// (the default).
+    fn snapshot(&self) -> Option<TrackerSnapshot> {
+        None
+    }
     /// Volume of each phase enclosed by the current mesh.
     fn phase_volumes(&self) -> Vec<f64>;
+}
+
+/// A boxed tracker is a tracker: the run loops hold whichever kind the scene asked for.
+impl<T: InterfaceTracker + ?Sized> InterfaceTracker for Box<T> {
+    fn advance(
+        &mut self,
+        velocity: &dyn VelocityField,
+        t: f64,
+        dt: f64,
+    ) -> Result<StepStats, TrackerError> {
+        (**self).advance(velocity, t, dt)
+    }
+    fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
+        (**self).phi_chi(x)
+    }
+    fn sample(&self, grid: &GridSpec) -> PhaseField {
+        (**self).sample(grid)
+    }
+    fn sample_advected(
+        &self,
+        grid: &GridSpec,
+        velocity: &dyn VelocityField,
+        t: f64,
+        dt: f64,
+    ) -> PhaseField {
+        (**self).sample_advected(grid, velocity, t, dt)
+    }
+    fn mesh(&self) -> &LabeledMesh {
+        (**self).mesh()
+    }
+    fn snapshot(&self) -> Option<TrackerSnapshot> {
+        (**self).snapshot()
+    }
+    fn phase_volumes(&self) -> Vec<f64> {
+        (**self).phase_volumes()
+    }
 }
 
 /// Departure point of the trajectory that reaches `x` at `t + dt`

@@ -1,0 +1,27 @@
+//! A tracker's whole state, as a checkpoint keeps it: restoring it continues the run bit for
+//! bit. Each tracker that can be checkpointed has its own variant.
+
+use crate::contour::MdTree;
+use crate::mesh::LabeledMesh;
+
+/// Everything a tracker needs to continue exactly where it stopped.
+#[derive(Clone, Debug)]
+pub enum TrackerSnapshot {
+    /// The contouring tracker: its mesh, the redistanced tree that answers φ, χ away from the
+    /// interface, the volume-correction targets and the loss carried into the next step.
+    Contour {
+        mesh: LabeledMesh,
+        tree: MdTree,
+        volume_targets: Option<Vec<f64>>,
+        carried_loss: Vec<f64>,
+    },
+}
+
+impl TrackerSnapshot {
+    /// The interface mesh of the snapshot.
+    pub fn mesh(&self) -> &LabeledMesh {
+        match self {
+            TrackerSnapshot::Contour { mesh, .. } => mesh,
+        }
+    }
+}
