@@ -11,6 +11,7 @@ mod run;
 mod run_coupled;
 mod run_passive;
 mod summary;
+mod validate;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -69,6 +70,9 @@ enum Command {
     Render(render::RenderArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Run the physics validation cases (validation/<case>/) and compare with their
+    /// references; exits non-zero if any metric fails.
+    Validate(validate::ValidateArgs),
     /// Measure the stages and print tables shaped like the papers'.
     Bench {
         #[command(subcommand)]
@@ -107,6 +111,7 @@ fn main() -> ExitCode {
             Ok(())
         }
         Command::Bench { what } => bench::bench(what),
+        Command::Validate(args) => validate::validate(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -175,7 +175,9 @@ fn frame_of(line: &str) -> Option<usize> {
     v.get("frame")?.as_u64().map(|f| f as usize)
 }
 
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+/// Writes `bytes` to `path` under a temporary name, then renames it: a killed program never
+/// leaves a half-written file.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let tmp = path.with_extension("tmp");
     let mut f =
         fs::File::create(&tmp).with_context(|| format!("cannot write {}", tmp.display()))?;

@@ -1,0 +1,109 @@
+//! A validation case as written: `validation/<case>/case.toml` names the scene, the source of
+//! the reference, and the metrics with their tolerances.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use anyhow::{ensure, Context, Result};
+use serde::Deserialize;
+
+/// One case folder's `case.toml`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaseFile {
+    /// One line for the table.
+    pub description: String,
+    /// The scene: a file relative to the case folder, or `builtin:NAME`.
+    pub scene: String,
+    /// Where the reference comes from: paper, table or figure, or the analytic solution.
+    pub source: String,
+    /// Tracker resolution of the coarse version `--quick` runs (the scene's own otherwise).
+    #[serde(default)]
+    pub quick_resolution: Option<i64>,
+    /// What is compared, each with its tolerance.
+    #[serde(rename = "metric")]
+    pub metrics: Vec<MetricSpec>,
+}
+
+/// One metric as written; `kind` selects which fields are needed (see `metrics.rs`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MetricSpec {
+    /// Name in the table.
+    pub name: String,
+    /// `rt_linear_growth`, `free_fall`, `roundness`, `max_value` or `series`.
+    pub kind: String,
+    /// The stats key it reads (a dotted path into a frame's JSON line, e.g. `tips.max`).
+    #[serde(default)]
+    pub key: Option<String>,
+    /// `rt_linear_growth`: the heavy and the light phase, by name.
+    #[serde(default)]
+    pub phases: Option<[String; 2]>,
+    /// `rt_linear_growth`: the perturbation's wavelength (m).
+    #[serde(default)]
+    pub wavelength: Option<f64>,
+    /// `series`: a CSV of `time,value` rows (header allowed), relative to the case folder.
+    #[serde(default)]
+    pub reference: Option<String>,
+    /// Largest accepted error: relative, or for `max_value` and `roundness` the bound itself.
+    pub tolerance: f64,
+    /// The tolerance of the `--quick` version, when its coarser grid needs another.
+    #[serde(default)]
+    pub quick_tolerance: Option<f64>,
+}
+
+/// A case found on disk.
+#[derive(Clone, Debug)]
+pub struct Case {
+    /// The folder's name.
+    pub name: String,
+    pub dir: PathBuf,
+    pub file: CaseFile,
+}
+
+impl Case {
+    /// Reads `dir/case.toml`; errors name the file.
+    pub fn load(dir: &Path) -> Result<Case> {
+        let path = dir.join("case.toml");
+        let text =
+            fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        let file: CaseFile = toml::from_str(&text)
+            .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message()))?;
+        ensure!(
+            !file.metrics.is_empty(),
+            "{}: at least one [[metric]] is required",
+            path.display()
+        );
+        for (i, m) in file.metrics.iter().enumerate() {
+            for (what, t) in [
+                ("tolerance", Some(m.tolerance)),
+                ("quick_tolerance", m.quick_tolerance),
+            ] {
+                if let Some(t) = t {
+                    ensure!(
+                        t.is_finite() && t >= 0.0,
+                        "{}: metric[{i}].{what}: must be a finite number ≥ 0, got {t}",
+                        path.display()
+                    );
+                }
+            }
+        }
+        let name = dir
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| dir.display().to_string());
+        Ok(Case {
+            name,
+            dir: dir.to_path_buf(),
+            file,
+        })
+    }
+
+    /// The scene argument for `polyphase run`: a built-in name or the scene file's path.
+    pub fn scene_arg(&self) -> String {
+        match self.file.scene.strip_prefix("builtin:") {
+            Some(name) => name.to_string(),
+            None => self.dir.join(&self.file.scene).display().to_string(),
+        }
+    }
+}

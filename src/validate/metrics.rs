@@ -1,0 +1,246 @@
+//! The metrics a validation case can ask for, each read off the run's `stats.jsonl` (and the
+//! resolved scene) and compared with its reference.
+
+use std::f64::consts::PI;
+use std::fs;
+use std::path::Path;
+
+use anyhow::{bail, ensure, Context, Result};
+use polyphase_coupling::RtLinear;
+use polyphase_scenes::Scene;
+use serde_json::Value;
+
+use super::case::MetricSpec;
+
+/// One metric's result.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    pub metric: String,
+    pub ours: f64,
+    pub reference: f64,
+    /// Relative error, or for bounds (`max_value`, `roundness`) the value itself.
+    pub error: f64,
+    pub tolerance: f64,
+    pub pass: bool,
+}
+
+/// Evaluates `spec` on the frames of a finished run of `scene`.
+pub fn evaluate(
+    spec: &MetricSpec,
+    frames: &[Value],
+    scene: &Scene,
+    case_dir: &Path,
+    quick: bool,
+) -> Result<Outcome> {
+    ensure!(frames.len() >= 2, "the run wrote fewer than two frames");
+    let tolerance = match (quick, spec.quick_tolerance) {
+        (true, Some(t)) => t,
+        _ => spec.tolerance,
+    };
+    let key = || {
+        spec.key
+            .as_deref()
+            .with_context(|| format!("metric '{}' ({}) needs `key`", spec.name, spec.kind))
+    };
+    let (first, last) = (&frames[0], &frames[frames.len() - 1]);
+    let t_end = number(last, "time")?;
+    let relative = |ours: f64, reference: f64| {
+        let error = ours / reference - 1.0;
+        (ours, reference, error, error.abs() <= tolerance)
+    };
+    let (ours, reference, error, pass) = match spec.kind.as_str() {
+        "rt_linear_growth" => {
+            let k = key()?;
+            let amplitude = |f: &Value| -> Result<f64> {
+                Ok(0.5 * (number(f, &format!("{k}.max"))? - number(f, &format!("{k}.min"))?))
+            };
+            let ours = (amplitude(last)? / amplitude(first)?).ln() / t_end;
+            relative(ours, rt_theory(spec, scene)?.ln() / t_end)
+        }
+        "free_fall" => {
+            let k = key()?;
+            let g = gravity(scene)?;
+            let down = g.normalize();
+            let centroid = |f: &Value| -> Result<glam::DVec3> {
+                let c = |a: usize| number(f, &format!("{k}.0.centroid.{a}"));
+                Ok(glam::DVec3::new(c(0)?, c(1)?, c(2)?))
+            };
+            let drop = (centroid(last)? - centroid(first)?).dot(down);
+            relative(drop, 0.5 * g.length() * t_end * t_end)
+        }
+        "roundness" => {
+            let k = key()?;
+            let mut worst: f64 = 0.0;
+            for f in frames {
+                let near = number(f, &format!("{k}.0.nearest"))?;
+                let far = number(f, &format!("{k}.0.farthest"))?;
+                worst = worst.max((1.0 - near).abs()).max((far - 1.0).abs());
+            }
+            (worst, 0.0, worst, worst <= tolerance)
+        }
+        "max_value" => {
+            let k = key()?;
+            let mut worst = f64::NEG_INFINITY;
+            for f in &frames[1..] {
+                worst = worst.max(number(f, k)?);
+            }
+            (worst, tolerance, worst, worst <= tolerance)
+        }
+        "series" => {
+            let k = key()?;
+            let file = spec
+                .reference
+                .as_deref()
+                .with_context(|| format!("metric '{}' (series) needs `reference`", spec.name))?;
+            let rows = read_series(&case_dir.join(file))?;
+            let times: Vec<f64> = frames
+                .iter()
+                .map(|f| number(f, "time"))
+                .collect::<Result<_>>()?;
+            let values: Vec<f64> = frames.iter().map(|f| number(f, k)).collect::<Result<_>>()?;
+            let mut worst: Option<(f64, f64, f64)> = None;
+            for (t, r) in rows {
+                let Some(o) = interpolate(&times, &values, t) else {
+                    continue;
+                };
+                let e = (o - r) / r;
+                if worst.is_none_or(|w| e.abs() > w.2.abs()) {
+                    worst = Some((o, r, e));
+                }
+            }
+            let (o, r, e) =
+                worst.with_context(|| format!("{file}: no reference time inside the run"))?;
+            (o, r, e, e.abs() <= tolerance)
+        }
+        other => bail!(
+            "metric '{}': unknown kind '{other}' (kinds: rt_linear_growth, free_fall, roundness, \
+             max_value, series)",
+            spec.name
+        ),
+    };
+    Ok(Outcome {
+        metric: spec.name.clone(),
+        ours,
+        reference,
+        error,
+        tolerance,
+        pass: pass && ours.is_finite(),
+    })
+}
+
+/// a(t)/a₀ of the exact linear theory from rest at the run's end time, for the metric's two
+/// phases; cosh(√(Agk) t) when either fluid is inviscid.
+fn rt_theory(spec: &MetricSpec, scene: &Scene) -> Result<f64> {
+    let [heavy, light] = spec
+        .phases
+        .as_ref()
+        .with_context(|| format!("metric '{}' needs `phases = [heavy, light]`", spec.name))?;
+    let lambda = spec
+        .wavelength
+        .with_context(|| format!("metric '{}' needs `wavelength`", spec.name))?;
+    let props = |name: &str| -> Result<(f64, f64)> {
+        let p = scene
+            .file
+            .phases
+            .iter()
+            .find(|p| p.name == name)
+            .with_context(|| format!("metric '{}': unknown phase '{name}'", spec.name))?;
+        Ok((p.density, p.viscosity))
+    };
+    let rt = RtLinear {
+        k: 2.0 * PI / lambda,
+        g: gravity(scene)?.length(),
+        heavy: props(heavy)?,
+        light: props(light)?,
+    };
+    let t = scene.file.time.end;
+    if rt.heavy.1 > 0.0 && rt.light.1 > 0.0 {
+        Ok(rt.amplitude_ratio(t))
+    } else {
+        let atwood = (rt.heavy.0 - rt.light.0) / (rt.heavy.0 + rt.light.0);
+        Ok(((atwood * rt.g * rt.k).sqrt() * t).cosh())
+    }
+}
+
+fn gravity(scene: &Scene) -> Result<glam::DVec3> {
+    let spec = scene
+        .file
+        .solver
+        .as_ref()
+        .context("the metric needs a coupled scene (gravity)")?;
+    Ok(glam::DVec3::from_array(spec.gravity))
+}
+
+/// The number at a dotted `path` of a stats line (`tips.max`, `pieces_water.0.centroid.1`).
+fn number(line: &Value, path: &str) -> Result<f64> {
+    let mut v = line;
+    for part in path.split('.') {
+        v = match part.parse::<usize>() {
+            Ok(i) if v.is_array() => &v[i],
+            _ => &v[part],
+        };
+    }
+    v.as_f64()
+        .with_context(|| format!("stats have no number at '{path}' (is it a [[measure]]?)"))
+}
+
+/// (time, value) rows of a CSV file; a first line that does not parse is a header.
+fn read_series(path: &Path) -> Result<Vec<(f64, f64)>> {
+    let text =
+        fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut rows = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let parsed = match cells.as_slice() {
+            [t, v] => t.parse::<f64>().ok().zip(v.parse::<f64>().ok()),
+            _ => None,
+        };
+        match parsed {
+            Some((t, v)) if t.is_finite() && v.is_finite() => rows.push((t, v)),
+            _ if i == 0 => continue,
+            _ => bail!("{}:{}: expected `time,value`", path.display(), i + 1),
+        }
+    }
+    ensure!(!rows.is_empty(), "{}: no rows", path.display());
+    Ok(rows)
+}
+
+/// Piecewise-linear y(x) over increasing xs; `None` outside their range.
+fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> Option<f64> {
+    xs.windows(2).zip(ys.windows(2)).find_map(|(x2, y2)| {
+        (x2[0] <= x && x <= x2[1]).then(|| {
+            if x2[1] > x2[0] {
+                y2[0] + (y2[1] - y2[0]) * (x - x2[0]) / (x2[1] - x2[0])
+            } else {
+                y2[0]
+            }
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn dotted_paths_reach_into_objects_and_arrays() {
+        let line = json!({"tips": {"max": 2.5}, "pieces_water": [{"centroid": [1.0, 0.5, 0.25]}]});
+        assert_eq!(number(&line, "tips.max").unwrap(), 2.5);
+        assert_eq!(number(&line, "pieces_water.0.centroid.1").unwrap(), 0.5);
+        let err = number(&line, "tips.min").unwrap_err().to_string();
+        assert!(err.contains("'tips.min'"), "{err}");
+    }
+
+    #[test]
+    fn interpolation_is_linear_and_stays_inside() {
+        let (xs, ys) = ([0.0, 1.0, 3.0], [0.0, 2.0, 3.0]);
+        assert_eq!(interpolate(&xs, &ys, 0.5), Some(1.0));
+        assert_eq!(interpolate(&xs, &ys, 2.0), Some(2.5));
+        assert_eq!(interpolate(&xs, &ys, 3.5), None);
+    }
+}

@@ -1,0 +1,90 @@
+//! `polyphase validate`: the shipped cases pass in their quick versions, and a failing or
+//! unknown case makes the command fail with the case named.
+
+mod common;
+
+use std::fs;
+
+use common::{polyphase, scratch};
+use serde_json::Value;
+
+#[test]
+fn shipped_cases_pass_in_their_quick_versions() {
+    let dir = scratch("validate_quick");
+    let json = dir.join("results.json");
+    let o = polyphase(&[
+        "validate",
+        "--quick",
+        "--out",
+        dir.join("runs").to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{table}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let rows: Value = serde_json::from_str(&fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    for case in ["fall", "hydrostatic2", "hydrostatic3", "rt_linear"] {
+        assert!(
+            rows.iter().any(|r| r["case"] == case && r["pass"] == true),
+            "{case} missing or failed: {table}"
+        );
+    }
+    // Every row names its reference's source and carries the numbers of the table.
+    for r in rows {
+        assert!(!r["source"].as_str().unwrap().is_empty());
+        assert!(r["ours"].is_f64() && r["tolerance"].is_f64(), "{r}");
+    }
+}
+
+#[test]
+fn a_failing_or_unknown_case_fails_the_command_and_names_it() {
+    let dir = scratch("validate_user");
+    let case = dir.join("my_column");
+    fs::create_dir_all(&case).unwrap();
+    // A user's own case: the built-in column's surge front against a made-up reference that
+    // runs 50 % ahead of it, so the 5 % tolerance must fail.
+    fs::write(
+        case.join("case.toml"),
+        r#"description = "made-up reference"
+scene = "builtin:dambreak_column"
+source = "invented for the test"
+quick_resolution = 32
+
+[[metric]]
+name = "surge front"
+kind = "series"
+key = "surge_front"
+reference = "front.csv"
+tolerance = 0.05
+"#,
+    )
+    .unwrap();
+    fs::write(case.join("front.csv"), "time,front\n0.0,0.15\n0.1,0.3\n").unwrap();
+    let o = polyphase(&[
+        "validate",
+        "--quick",
+        "--out",
+        dir.join("runs").to_str().unwrap(),
+        case.to_str().unwrap(),
+    ]);
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(!o.status.success(), "{out}");
+    assert!(out.contains("my_column") && out.contains("FAIL"), "{out}");
+    assert!(err.contains("my_column: surge front"), "{err}");
+
+    let o = polyphase(&["validate", "no_such_case"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("unknown validation case 'no_such_case'") && err.contains("rt_linear"),
+        "{err}"
+    );
+}
