@@ -1,4 +1,5 @@
-//! The scene's declared measurements (`[[measure]]`) as JSON for `stats.jsonl`: a front is a
+//! What stats report of the interface beyond volumes and timings: the volume correction's
+//! share, and the scene's declared measurements (`[[measure]]`): a front is a
 //! number, tips are `{min, max}`, a centroid is `[x, y, z]`, pieces are a list of
 //! `{volume, centroid, radius, nearest, farthest}`; `null` where the phase is gone.
 
@@ -27,5 +28,19 @@ pub fn add_measurements(line: &mut Value, scene: &Scene, mesh: &LabeledMesh) {
                 }))
                 .collect::<Vec<_>>()),
         };
+    }
+}
+
+/// Adds `volume_correction` {phase: volume the correction added over the frame, relative to
+/// the phase's initial (exact) volume} for the phases it touched; nothing when it touched none.
+pub fn add_volume_correction(line: &mut Value, names: &[String], given: &[f64], volumes: &[f64]) {
+    let touched: serde_json::Map<String, Value> = names
+        .iter()
+        .zip(given.iter().zip(volumes))
+        .filter(|(_, (g, v))| **g != 0.0 && **v > 0.0)
+        .map(|(n, (g, v))| (n.clone(), json!(g / v)))
+        .collect();
+    if !touched.is_empty() {
+        line["volume_correction"] = Value::Object(touched);
     }
 }

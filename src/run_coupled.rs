@@ -15,7 +15,7 @@ use polyphase_tracker::{InterfaceTracker, StepStats};
 use serde_json::{json, Value};
 
 use crate::checkpoint::{Checkpoint, Totals};
-use crate::measurements::add_measurements;
+use crate::measurements::{add_measurements, add_volume_correction};
 use crate::output::RunFolder;
 use crate::run::{progress, Progress, Start};
 use crate::summary::Summary;
@@ -219,5 +219,11 @@ fn frame_line<T: InterfaceTracker>(
         "interface_lag": report.interface_lag,
     });
     add_measurements(&mut line, scene, mesh);
+    add_volume_correction(
+        &mut line,
+        &names,
+        &report.volume_correction,
+        &scene.reference_volumes(),
+    );
     line
 }

@@ -13,7 +13,7 @@ use polyphase_tracker::{metrics, InterfaceTracker, LabeledMesh, StepStats};
 use serde_json::{json, Value};
 
 use crate::checkpoint::{Checkpoint, Totals};
-use crate::measurements::add_measurements;
+use crate::measurements::{add_measurements, add_volume_correction};
 use crate::output::RunFolder;
 use crate::run::{progress, Progress, Start};
 use crate::summary::Summary;
@@ -166,6 +166,18 @@ fn accumulate(total: &mut StepStats, step: &StepStats) {
     }
     total.cells = step.cells;
     total.interface_cells = step.interface_cells;
+    if total.volume_correction.len() < step.volume_correction.len() {
+        total
+            .volume_correction
+            .resize(step.volume_correction.len(), 0.0);
+    }
+    for (t, v) in total
+        .volume_correction
+        .iter_mut()
+        .zip(&step.volume_correction)
+    {
+        *t += v;
+    }
 }
 
 fn frame_line(
@@ -195,6 +207,12 @@ fn frame_line(
         "interface_cells": stats.interface_cells,
     });
     add_measurements(&mut line, scene, mesh);
+    add_volume_correction(
+        &mut line,
+        &names,
+        &stats.volume_correction,
+        &scene.reference_volumes(),
+    );
     line
 }
 

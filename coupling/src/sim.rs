@@ -46,6 +46,9 @@ pub struct FrameReport {
     pub interface_cells: usize,
     /// Largest [`interface_lag`] of the frame's tracker steps, in solver cells.
     pub interface_lag: f64,
+    /// Per phase, the volume (m³) the tracker's volume correction added over the frame
+    /// ([`StepStats::volume_correction`], summed).
+    pub volume_correction: Vec<f64>,
 }
 
 impl FrameReport {
@@ -250,6 +253,18 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         }
         report.cells = tracked.cells;
         report.interface_cells = tracked.interface_cells;
+        if report.volume_correction.len() < tracked.volume_correction.len() {
+            report
+                .volume_correction
+                .resize(tracked.volume_correction.len(), 0.0);
+        }
+        for (r, v) in report
+            .volume_correction
+            .iter_mut()
+            .zip(&tracked.volume_correction)
+        {
+            *r += v;
+        }
         report.tracker_steps += 1;
         Ok(())
     }

@@ -145,6 +145,7 @@ fn rebuild(
         ],
         cells: tree.cell_count(),
         interface_cells: tree.interface_cell_count(),
+        ..StepStats::default()
     };
     (tree, mesh, query, stats)
 }
@@ -202,6 +203,7 @@ impl InterfaceTracker for ContourTracker {
             .volume_targets
             .as_ref()
             .map(|targets| first_aim(targets, &self.carried_loss));
+        let before = aim.as_ref().map(|_| self.mesh.phase_volumes(self.n_phases));
         let mut retried: Vec<(&'static str, f64)> = Vec::new();
         let mut retries = 0;
         let (tree, mesh, query, mut stats) = loop {
@@ -240,6 +242,14 @@ impl InterfaceTracker for ContourTracker {
                 Some((_, total)) => *total += secs,
                 None => stats.stages.push((name, secs)),
             }
+        }
+        if let (Some(before), Some(shift)) = (before, &departure.shift) {
+            stats.volume_correction = shift
+                .aimed()
+                .iter()
+                .zip(before)
+                .map(|(aimed, v)| aimed.map_or(0.0, |a| a - v))
+                .collect();
         }
         self.tree = tree;
         self.mesh = mesh;

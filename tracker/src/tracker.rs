@@ -17,6 +17,9 @@ pub struct StepStats {
     pub cells: usize,
     /// Finest cells the interface crosses (Table 1 "Intersect Cells").
     pub interface_cells: usize,
+    /// Per phase, the volume (m³) the step's volume correction added to it, to first order in
+    /// its offset (negative: removed); empty when the tracker corrects nothing.
+    pub volume_correction: Vec<f64>,
 }
 
 /// Why a step could not be taken.

@@ -299,8 +299,7 @@ impl InterfaceTracker for FrontTracker {
                 ("collide", self.seconds[1]),
                 ("remesh", remesh),
             ],
-            cells: 0,
-            interface_cells: 0,
+            ..StepStats::default()
         })
     }
 
