@@ -96,16 +96,22 @@ fn rayleigh_taylor_growth_at_the_default_tracker_cfl() {
     );
 }
 
-/// The water column at low resolution, run to `end`.
-fn column(resolution: i64, end: f64) -> CoupledSim<AnyTracker> {
-    let scene = builtin("dambreak_column")
+/// The water column at low resolution, run to `end`, with or without the volume correction.
+fn column_with(resolution: i64, end: f64, correction: bool) -> CoupledSim<AnyTracker> {
+    let mut scene = builtin("dambreak_column")
         .unwrap()
         .unwrap()
         .with_overrides(Some(resolution), Some(1))
         .unwrap();
+    scene.file.volume_correction = correction;
     let (mut sim, _) = from_scene(&scene).unwrap();
     sim.advance_to(end).unwrap();
     sim
+}
+
+/// The water column at low resolution, run to `end` as the scene says (corrected).
+fn column(resolution: i64, end: f64) -> CoupledSim<AnyTracker> {
+    column_with(resolution, end, true)
 }
 
 #[test]
@@ -114,16 +120,24 @@ fn column_collapse_conserves_phase_volumes() {
     let scene = scene.with_overrides(Some(64), Some(1)).unwrap();
     let (sim0, _) = from_scene(&scene).unwrap();
     let start = sim0.tracker().phase_volumes();
-    let sim = column(64, 0.2);
-    let end = sim.tracker().phase_volumes();
-    for (a, b) in start.iter().zip(&end) {
-        // The budget is 2 % per phase; the incompressible flow conserves volume
-        // exactly, so what drifts is the tracker's resampling at 32 cells across the column.
-        assert!((b - a).abs() < 0.02 * a, "volume {a} -> {b}");
+    for correction in [false, true] {
+        let sim = column_with(64, 0.2, correction);
+        let end = sim.tracker().phase_volumes();
+        for (a, b) in start.iter().zip(&end) {
+            // The budget is 2 % per phase; the incompressible flow conserves volume
+            // exactly, so what drifts is the tracker's resampling at 32 cells across the
+            // column: measured −0.58 % of the water without the correction (the method's
+            // own), −0.33 % with it (against frame 0, which the correction's exact target
+            // lies above by the first contouring's shortfall).
+            assert!(
+                (b - a).abs() < 0.02 * a,
+                "correction {correction}: {a} -> {b}"
+            );
+        }
+        // The front has left the column (x = a = 0.1 m) and moved along the floor.
+        let (_, front) = interface_extent(sim.tracker().mesh(), 1, None, 0).unwrap();
+        assert!(front > 0.2, "surge front {front}");
     }
-    // The front has left the column (x = a = 0.1 m) and moved along the floor.
-    let (_, front) = interface_extent(sim.tracker().mesh(), 1, None, 0).unwrap();
-    assert!(front > 0.2, "surge front {front}");
 }
 
 #[test]
