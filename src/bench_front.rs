@@ -72,7 +72,7 @@ fn measure<T: InterfaceTracker>(
     let reference = scene.reference_volumes();
     let initial = tracker.mesh().clone();
     let start_volumes = tracker.phase_volumes();
-    let per_frame = scene.steps_per_frame();
+    let per_frame = scene.steps_per_frame(tracker.max_travel());
     let total = per_frame * scene.file.time.frames as usize;
     let steps = limit.unwrap_or(total).min(total);
     let dt = scene.frame_dt() / per_frame as f64;

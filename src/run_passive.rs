@@ -20,19 +20,6 @@ use crate::summary::Summary;
 
 /// Runs (or resumes) a passive scene in `folder`.
 pub fn run_passive(scene: &Scene, folder: &RunFolder, root: &Path, start: Start) -> Result<()> {
-    let frames = scene.file.time.frames as usize;
-    eprintln!(
-        "{}: {}×{}×{} cells (h = {:.4e}), {frames} frames × {} steps, {:?} tracker, output {}",
-        scene.file.name,
-        scene.grid.dims[0],
-        scene.grid.dims[1],
-        scene.grid.dims[2],
-        scene.grid.h,
-        scene.steps_per_frame(),
-        scene.file.tracker.kind,
-        root.display()
-    );
-    let steps = scene.steps_per_frame();
     let (tracker, hash, done, prior) = match start {
         Start::Fresh(hash) => {
             let (tracker, first) = build_tracker(scene, None)?;
@@ -44,6 +31,18 @@ pub fn run_passive(scene: &Scene, folder: &RunFolder, root: &Path, start: Start)
             (tracker, c.scene_hash, Progress::After(c.frame), c.totals)
         }
     };
+    let frames = scene.file.time.frames as usize;
+    let steps = scene.steps_per_frame(tracker.max_travel());
+    eprintln!(
+        "{}: {}×{}×{} cells (h = {:.4e}), {frames} frames × {steps} steps, {:?} tracker, output {}",
+        scene.file.name,
+        scene.grid.dims[0],
+        scene.grid.dims[1],
+        scene.grid.dims[2],
+        scene.grid.h,
+        scene.file.tracker.kind,
+        root.display()
+    );
     // The periodic error of the last frame compares with the first mesh (rebuilt exactly when
     // resuming: the initial build is deterministic).
     let initial_mesh = match done {
@@ -95,7 +94,7 @@ fn track<T: InterfaceTracker>(
     let names = scene.phase_names();
     let reference = scene.reference_volumes();
     let frames = scene.file.time.frames as usize;
-    let steps = scene.steps_per_frame();
+    let steps = scene.steps_per_frame(tracker.max_travel());
     let dt = scene.frame_dt() / steps as f64;
     let mut summary = Summary::new(&names);
     for (name, secs) in &prior.stages {

@@ -43,7 +43,7 @@ fn run(name: &str, resolution: i64) -> Finished {
     let hits = self_intersections(&initial);
     assert!(hits.is_empty(), "{name} {resolution} start: {hits:?}");
     let start_volumes = tracker.phase_volumes();
-    let per_frame = scene.steps_per_frame();
+    let per_frame = scene.steps_per_frame(tracker.max_travel());
     let total = per_frame * scene.file.time.frames as usize;
     let dt = scene.frame_dt() / per_frame as f64;
     for s in 0..total {

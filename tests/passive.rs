@@ -34,10 +34,11 @@ fn run_scene(scene: &Scene, steps: Option<usize>) -> Finished {
     let sampler = |x| scene.initial.sample(x);
     let (mut tracker, _) = ContourTracker::new(scene.grid, &sampler, n, scene.initial.background);
     tracker.set_volume_targets(scene.volume_targets());
+    tracker.set_max_travel(scene.file.time.cfl * scene.grid.h);
     let min_area = 0.0;
     invariants::check(tracker.mesh(), min_area).unwrap_or_else(|e| panic!("{name} start: {e}"));
     let initial = tracker.mesh().clone();
-    let per_frame = scene.steps_per_frame();
+    let per_frame = scene.steps_per_frame(tracker.max_travel());
     let total = per_frame * scene.file.time.frames as usize;
     let dt = scene.frame_dt() / per_frame as f64;
     for s in 0..steps.unwrap_or(total).min(total) {

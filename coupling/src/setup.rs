@@ -43,7 +43,7 @@ pub fn build_tracker(
                 carried_loss,
             }),
         ) => {
-            let tracker = ContourTracker::from_parts(
+            let mut tracker = ContourTracker::from_parts(
                 scene.grid,
                 mesh,
                 tree,
@@ -52,6 +52,7 @@ pub fn build_tracker(
                 volume_targets,
                 carried_loss,
             );
+            tracker.set_max_travel(scene.file.time.cfl * scene.grid.h);
             Ok((Box::new(tracker), StepStats::default()))
         }
         (TrackerKind::Front, None) => {
@@ -83,8 +84,8 @@ pub fn build_tracker(
 /// tracker (built by [`build_tracker`]) for a coupled scene, plus the tracker's first-build
 /// stats.
 pub fn from_scene(scene: &Scene) -> Result<(CoupledSim<AnyTracker>, StepStats), CouplingError> {
-    let (solver, phases, control) = solver_parts(scene)?;
     let (tracker, first) = build_tracker(scene, None)?;
+    let (solver, phases, control) = solver_parts(scene, tracker.max_travel())?;
     Ok((CoupledSim::new(solver, tracker, phases, control)?, first))
 }
 
@@ -95,12 +96,16 @@ pub fn with_tracker<T: InterfaceTracker>(
     scene: &Scene,
     tracker: T,
 ) -> Result<CoupledSim<T>, CouplingError> {
-    let (solver, phases, control) = solver_parts(scene)?;
+    let (solver, phases, control) = solver_parts(scene, tracker.max_travel())?;
     CoupledSim::new(solver, tracker, phases, control)
 }
 
-/// The solver, phase properties and time control a coupled scene asks for.
-fn solver_parts(scene: &Scene) -> Result<(Solver, Vec<PhaseProps>, TimeControl), CouplingError> {
+/// The solver, phase properties and time control a coupled scene asks for, the tracker
+/// advancing after the fluid moved `tracker_travel`.
+fn solver_parts(
+    scene: &Scene,
+    tracker_travel: f64,
+) -> Result<(Solver, Vec<PhaseProps>, TimeControl), CouplingError> {
     let (Some(grid), Some(spec)) = (scene.solver_grid, scene.file.solver.as_ref()) else {
         return Err(CouplingError::Invalid(format!(
             "scene '{}' is passive (velocity.field is not \"fluid\")",
@@ -132,7 +137,7 @@ fn solver_parts(scene: &Scene) -> Result<(Solver, Vec<PhaseProps>, TimeControl),
     let control = TimeControl {
         cfl: spec.cfl,
         max_dt: spec.max_dt.unwrap_or(scene.frame_dt()),
-        tracker_travel: scene.tracker_travel(),
+        tracker_travel,
     };
     Ok((solver, phases, control))
 }

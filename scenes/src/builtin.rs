@@ -108,9 +108,9 @@ mod tests {
         assert_eq!(front.max_edge, defaults.max_edge);
         let again = Scene::parse(&table.to_toml(), "resolved").unwrap();
         assert_eq!(again.file.tracker, table.file.tracker);
-        // The front moves at most cfl · h per step (edge_length defaults to h): half the cfl
-        // takes twice the steps, up to the rounding up of the count.
-        let (a, b) = (short.steps_per_frame(), table.steps_per_frame());
+        // Half the travel per step takes twice the steps, up to the rounding up of the count.
+        let h = short.grid.h;
+        let (a, b) = (short.steps_per_frame(h), short.steps_per_frame(0.5 * h));
         assert!(b == 2 * a || b == 2 * a - 1, "{a} vs {b}");
         assert_eq!(
             Scene::parse(good, "contour").unwrap().file.tracker,

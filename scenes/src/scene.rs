@@ -233,22 +233,12 @@ impl Scene {
         self.file.time.end / self.file.time.frames as f64
     }
 
-    /// How far one tracker step may move the interfaces: `time.cfl` cells, or with the front
-    /// tracker `tracker.front.cfl` target edge lengths.
-    pub fn tracker_travel(&self) -> f64 {
-        match &self.file.tracker.front {
-            Some(front) if self.file.tracker.kind == TrackerKind::Front => {
-                front.cfl * front.edge_length.unwrap_or(self.grid.h)
-            }
-            _ => self.file.time.cfl * self.grid.h,
-        }
-    }
-
     /// Tracker steps per frame of a passive scene: enough that no step moves a point more
-    /// than [`Scene::tracker_travel`].
-    pub fn steps_per_frame(&self) -> usize {
+    /// than `travel` (the tracker's [`max_travel`]).
+    ///
+    /// [`max_travel`]: polyphase_tracker::InterfaceTracker::max_travel
+    pub fn steps_per_frame(&self, travel: f64) -> usize {
         let vmax = self.velocity.max_speed(self.grid.origin, self.grid.upper());
-        let travel = self.tracker_travel();
         let dt_max = travel / vmax.max(1e-300);
         (self.frame_dt() / dt_max).ceil().max(1.0) as usize
     }

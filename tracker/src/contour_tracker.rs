@@ -29,7 +29,14 @@ pub struct ContourTracker {
     /// Per phase, the last step's loss beyond what its correction aimed for; the next step
     /// aims that much above the target (see [`crate::volume_correction::carried_loss`]).
     carried_loss: Vec<f64>,
+    /// How far (m) the interfaces may move in one step ([`ContourTracker::set_max_travel`]).
+    max_travel: f64,
 }
+
+/// A step's default travel in cells, the scene format's default `time.cfl`: the
+/// semi-Lagrangian step is stable for any, and each step resamples the mesh, so fewer, longer
+/// steps keep more of it.
+pub const DEFAULT_TRAVEL_CELLS: f64 = 8.0;
 
 impl ContourTracker {
     /// Builds the first mesh from exact initial φ, χ (paper 004 §7.2: "the tree was initially
@@ -51,6 +58,7 @@ impl ContourTracker {
             query,
             volume_targets,
             carried_loss: vec![0.0; n_phases],
+            max_travel: DEFAULT_TRAVEL_CELLS * grid.h,
         };
         (tracker, stats)
     }
@@ -77,6 +85,7 @@ impl ContourTracker {
             query,
             volume_targets,
             carried_loss,
+            max_travel: DEFAULT_TRAVEL_CELLS * grid.h,
         }
     }
 
@@ -91,6 +100,12 @@ impl ContourTracker {
     pub fn set_volume_targets(&mut self, targets: Option<Vec<f64>>) {
         self.volume_targets = targets;
         self.carried_loss = vec![0.0; self.n_phases];
+    }
+
+    /// Sets how far (m) the interfaces may move in one step (a scene's `time.cfl` cells);
+    /// [`DEFAULT_TRAVEL_CELLS`] cells until then.
+    pub fn set_max_travel(&mut self, travel: f64) {
+        self.max_travel = travel;
     }
 
     /// The volumes the correction restores, if it is on.
@@ -255,6 +270,10 @@ impl InterfaceTracker for ContourTracker {
         self.mesh = mesh;
         self.query = query;
         Ok(stats)
+    }
+
+    fn max_travel(&self) -> f64 {
+        self.max_travel
     }
 
     fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {

@@ -39,6 +39,9 @@ pub trait InterfaceTracker: Send + Sync {
         t: f64,
         dt: f64,
     ) -> Result<StepStats, TrackerError>;
+    /// How far (m) the interfaces may move in one step of this tracker: a run takes enough
+    /// steps (passive) or advances the tracker often enough (coupled) to stay within it.
+    fn max_travel(&self) -> f64;
     /// Exact φ (unsigned distance) and χ (phase) of the current interface at `x`.
     fn phi_chi(&self, x: DVec3) -> (f64, PhaseId);
     /// φ and χ at the cell centres of `grid`.
@@ -79,6 +82,9 @@ impl<T: InterfaceTracker + ?Sized> InterfaceTracker for Box<T> {
         dt: f64,
     ) -> Result<StepStats, TrackerError> {
         (**self).advance(velocity, t, dt)
+    }
+    fn max_travel(&self) -> f64 {
+        (**self).max_travel()
     }
     fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
         (**self).phi_chi(x)

@@ -303,6 +303,11 @@ impl InterfaceTracker for FrontTracker {
         })
     }
 
+    /// `cfl` target edge lengths (paper 000 moves at most about one edge length per step).
+    fn max_travel(&self) -> f64 {
+        self.params.cfl * self.target
+    }
+
     fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
         let n = self
             .query
