@@ -3,14 +3,25 @@
 //! number, tips are `{min, max}`, a centroid is `[x, y, z]`, pieces are a list of
 //! `{volume, centroid, radius, nearest, farthest}`; `null` where the phase is gone.
 
+use anyhow::Result;
 use polyphase_coupling::{measure, Measured};
-use polyphase_scenes::Scene;
-use polyphase_tracker::LabeledMesh;
+use polyphase_scenes::{MeasureKind, Scene};
+use polyphase_tracker::{LabeledMesh, PhaseId};
 use serde_json::{json, Value};
 
-/// Adds each of the scene's measurements of `mesh` to the stats line under its name.
-pub fn add_measurements(line: &mut Value, scene: &Scene, mesh: &LabeledMesh) {
+/// Adds each of the scene's measurements of `mesh` to the stats line under its name;
+/// `rise_velocity` of a phase comes from `rise` (the fluid's, in a coupled run).
+pub fn add_measurements(
+    line: &mut Value,
+    scene: &Scene,
+    mesh: &LabeledMesh,
+    rise: &dyn Fn(PhaseId) -> Result<Option<f64>>,
+) -> Result<()> {
     for m in &scene.measures {
+        if let MeasureKind::RiseVelocity { phase } = m.kind {
+            line[m.name.as_str()] = json!(rise(phase)?);
+            continue;
+        }
         line[m.name.as_str()] = match measure(mesh, &m.kind) {
             Measured::Value(v) => json!(v),
             Measured::Range(r) => {
@@ -29,6 +40,7 @@ pub fn add_measurements(line: &mut Value, scene: &Scene, mesh: &LabeledMesh) {
                 .collect::<Vec<_>>()),
         };
     }
+    Ok(())
 }
 
 /// Adds `volume_correction` {phase: volume the correction added over the frame, relative to

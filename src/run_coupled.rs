@@ -102,7 +102,7 @@ fn simulate<T: InterfaceTracker>(
                 interface_cells: first.interface_cells,
                 ..FrameReport::default()
             };
-            folder.append_stats(&frame_line(0, 0.0, &initial, &sim, scene))?;
+            folder.append_stats(&frame_line(0, 0.0, &initial, &sim, scene)?)?;
             save(
                 0,
                 &sim,
@@ -138,7 +138,7 @@ fn simulate<T: InterfaceTracker>(
         });
         pressure_its += report.pressure_iterations;
         viscosity_its += report.viscosity_iterations;
-        folder.append_stats(&frame_line(frame, time, &report, &sim, scene))?;
+        folder.append_stats(&frame_line(frame, time, &report, &sim, scene)?)?;
         save(
             frame,
             &sim,
@@ -191,7 +191,7 @@ fn frame_line<T: InterfaceTracker>(
     report: &FrameReport,
     sim: &CoupledSim<T>,
     scene: &Scene,
-) -> Value {
+) -> Result<Value> {
     let tracker = sim.tracker();
     let names = scene.phase_names();
     let volumes: BTreeMap<&str, f64> = names
@@ -218,12 +218,14 @@ fn frame_line<T: InterfaceTracker>(
         "interface_cells": report.interface_cells,
         "interface_lag": report.interface_lag,
     });
-    add_measurements(&mut line, scene, mesh);
+    add_measurements(&mut line, scene, mesh, &|phase| {
+        Ok(sim.rise_velocity(phase)?)
+    })?;
     add_volume_correction(
         &mut line,
         &names,
         &report.volume_correction,
         &scene.reference_volumes(),
     );
-    line
+    Ok(line)
 }

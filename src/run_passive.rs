@@ -104,7 +104,7 @@ fn track<T: InterfaceTracker>(
         Progress::Fresh(first) => {
             summary.add_step(&first);
             folder.write_frame(0, tracker.mesh())?;
-            folder.append_stats(&frame_line(0, 0.0, 0, &first, &tracker, scene))?;
+            folder.append_stats(&frame_line(0, 0.0, 0, &first, &tracker, scene)?)?;
             save(0, &tracker, &summary, 0.0)?;
             0
         }
@@ -130,7 +130,7 @@ fn track<T: InterfaceTracker>(
         stats
             .stages
             .push(("write", write_start.elapsed().as_secs_f64()));
-        let mut line = frame_line(frame, time, steps, &stats, &tracker, scene);
+        let mut line = frame_line(frame, time, steps, &stats, &tracker, scene)?;
         if let (true, Some(initial_mesh)) = (frame == frames, initial_mesh) {
             add_period_errors(&mut line, &tracker, initial_mesh, &reference, &names, scene);
         }
@@ -186,7 +186,7 @@ fn frame_line(
     stats: &StepStats,
     tracker: &impl InterfaceTracker,
     scene: &Scene,
-) -> Value {
+) -> Result<Value> {
     let names = scene.phase_names();
     let volumes: BTreeMap<&str, f64> = names
         .iter()
@@ -205,14 +205,15 @@ fn frame_line(
         "cells": stats.cells,
         "interface_cells": stats.interface_cells,
     });
-    add_measurements(&mut line, scene, mesh);
+    // Scene validation allows `rise_velocity` on coupled scenes only.
+    add_measurements(&mut line, scene, mesh, &|_| Ok(None))?;
     add_volume_correction(
         &mut line,
         &names,
         &stats.volume_correction,
         &scene.reference_volumes(),
     );
-    line
+    Ok(line)
 }
 
 /// For a periodic flow the shapes should be back where they started: relative volume error per

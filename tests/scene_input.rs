@@ -209,6 +209,14 @@ fn bad_scene_input_fails_with_one_line_and_writes_nothing() {
         None,
         &["measure[0].axis", "must be x, y or z"],
     );
+    let rise = "[[measure]]\nkind = \"rise_velocity\"\nphase = \"water\"\n";
+    assert_refused(
+        &dir,
+        "measure_rise",
+        &scene_text(TWO_LIQUIDS, rise),
+        None,
+        &["measure[0].kind", "needs a coupled scene"],
+    );
     // The octahedron without its last face: three edges with one face each.
     let open = octahedron([0.5; 3], 0.3).replace("f 1 4 6\n", "");
     assert_refused(

@@ -33,7 +33,8 @@ pub struct Piece {
     pub farthest: f64,
 }
 
-/// Evaluates one measurement on the tracker's mesh.
+/// Evaluates one measurement on the tracker's mesh. `rise_velocity` needs the fluid too
+/// ([`crate::CoupledSim::rise_velocity`]): here it is `Value(None)`.
 pub fn measure(mesh: &LabeledMesh, kind: &MeasureKind) -> Measured {
     match *kind {
         MeasureKind::Front { phase, axis } => {
@@ -50,6 +51,7 @@ pub fn measure(mesh: &LabeledMesh, kind: &MeasureKind) -> Measured {
             Measured::Point((volume > 0.0).then(|| moment / volume))
         }
         MeasureKind::Pieces { phase } => Measured::Pieces(pieces(mesh, phase)),
+        MeasureKind::RiseVelocity { .. } => Measured::Value(None),
     }
 }
 

@@ -2,8 +2,9 @@
 
 use std::time::Instant;
 
+use glam::DVec3;
 use polyphase_solver::{PhaseProps, Solver, SolverState};
-use polyphase_tracker::{InterfaceTracker, PhaseField, StepStats};
+use polyphase_tracker::{InterfaceTracker, PhaseField, PhaseId, StepStats};
 
 use crate::error::CouplingError;
 use crate::pending::PendingSteps;
@@ -142,6 +143,26 @@ impl<T: InterfaceTracker> CoupledSim<T> {
     /// The phases' densities and viscosities.
     pub fn phases(&self) -> &[PhaseProps] {
         &self.phases
+    }
+
+    /// The mean velocity against gravity of the solver cells whose phase is `phase` (each in
+    /// its own phase's field, [`Solver::cell_velocities`]); `None` when no cell holds it or
+    /// there is no gravity. A bubble's rise velocity in the sense of Hysing et al. (2009).
+    pub fn rise_velocity(&self, phase: PhaseId) -> Result<Option<f64>, CouplingError> {
+        let up = -self.solver.gravity().normalize_or_zero();
+        if up == DVec3::ZERO {
+            return Ok(None);
+        }
+        let field = self.tracker.sample(self.solver.grid());
+        let velocities = self.solver.cell_velocities(&field, &self.phases)?;
+        let (mut sum, mut n) = (0.0, 0usize);
+        for (v, &chi) in velocities.iter().zip(&field.chi) {
+            if chi == phase {
+                sum += v.dot(up);
+                n += 1;
+            }
+        }
+        Ok((n > 0).then(|| sum / n as f64))
     }
 
     /// The interface tracker.

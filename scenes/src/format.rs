@@ -51,7 +51,8 @@ pub struct SceneFile {
 /// `front` (phase, axis): the largest coordinate along `axis` of the phase's surface; `tips`
 /// (phases = [a, b], axis): the smallest and largest coordinate of the a–b interface;
 /// `centroid` (phase): the centre of the phase's volume; `pieces` (phase): every connected
-/// piece of the phase with its volume, centroid and roundness.
+/// piece of the phase with its volume, centroid and roundness; `rise_velocity` (phase, coupled
+/// scenes): the mean velocity of the phase's solver cells against gravity.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeasureSpec {

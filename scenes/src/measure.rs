@@ -19,6 +19,9 @@ pub enum MeasureKind {
     /// Each connected piece of `phase`: volume, centroid, and its vertices' smallest and
     /// largest distance from the centroid over the equivalent radius (a drop's roundness).
     Pieces { phase: PhaseId },
+    /// The mean upward velocity (against gravity) of the solver cells of `phase`: a bubble's
+    /// or drop's rise velocity (Hysing et al. 2009). Coupled scenes only.
+    RiseVelocity { phase: PhaseId },
 }
 
 /// A validated measurement with its stats key.
@@ -30,10 +33,12 @@ pub struct Measure {
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 
-/// Validates the scene's `[[measure]]` tables against its phase names; errors name the table.
+/// Validates the scene's `[[measure]]` tables against its phase names (`coupled`: whether the
+/// scene has a fluid, which `rise_velocity` needs); errors name the table.
 pub fn compile_measures(
     specs: &[MeasureSpec],
     phases: &[String],
+    coupled: bool,
     bad: &dyn Fn(&str, String) -> SceneError,
 ) -> Result<Vec<Measure>, SceneError> {
     let mut out: Vec<Measure> = Vec::with_capacity(specs.len());
@@ -112,10 +117,28 @@ pub fn compile_measures(
                 let (phase, name) = one_phase()?;
                 (MeasureKind::Pieces { phase }, format!("pieces_{name}"))
             }
+            "rise_velocity" => {
+                if !coupled {
+                    return Err(bad(
+                        &format!("{place}.kind"),
+                        "'rise_velocity' reads the fluid's velocity: it needs a coupled scene \
+                         (velocity.field = \"fluid\")"
+                            .into(),
+                    ));
+                }
+                let (phase, name) = one_phase()?;
+                (
+                    MeasureKind::RiseVelocity { phase },
+                    format!("rise_velocity_{name}"),
+                )
+            }
             other => {
                 return Err(bad(
                     &format!("{place}.kind"),
-                    format!("unknown kind '{other}' (kinds: front, tips, centroid, pieces)"),
+                    format!(
+                        "unknown kind '{other}' (kinds: front, tips, centroid, pieces, \
+                         rise_velocity)"
+                    ),
                 ))
             }
         };

@@ -148,7 +148,7 @@ impl Scene {
         }
         // Painting order: a later shape wins, so ascending priority (stable: file order among equals).
         shapes.sort_by_key(|s| s.priority);
-        let measures = compile_measures(&file.measure, &phases, &bad)?;
+        let measures = compile_measures(&file.measure, &phases, solver_grid.is_some(), &bad)?;
         Ok(Scene {
             file,
             grid,

@@ -113,6 +113,11 @@ impl Solver {
         &self.config.grid
     }
 
+    /// Gravity (m/s²).
+    pub fn gravity(&self) -> DVec3 {
+        self.config.gravity
+    }
+
     /// The velocity; implements [`polyphase_grid::VelocityField`] for trackers.
     pub fn velocity(&self) -> &MacGrid {
         &self.velocity

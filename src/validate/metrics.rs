@@ -184,16 +184,19 @@ fn number(line: &Value, path: &str) -> Result<f64> {
         .with_context(|| format!("stats have no number at '{path}' (is it a [[measure]]?)"))
 }
 
-/// (time, value) rows of a CSV file; a first line that does not parse is a header.
+/// (time, value) rows of a CSV file; `#` lines are comments, and a first row that does not
+/// parse is a header.
 fn read_series(path: &Path) -> Result<Vec<(f64, f64)>> {
     let text =
         fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let mut rows = Vec::new();
+    let mut first = true;
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
+        let header = std::mem::replace(&mut first, false);
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
         let parsed = match cells.as_slice() {
             [t, v] => t.parse::<f64>().ok().zip(v.parse::<f64>().ok()),
@@ -201,7 +204,7 @@ fn read_series(path: &Path) -> Result<Vec<(f64, f64)>> {
         };
         match parsed {
             Some((t, v)) if t.is_finite() && v.is_finite() => rows.push((t, v)),
-            _ if i == 0 => continue,
+            _ if header => continue,
             _ => bail!("{}:{}: expected `time,value`", path.display(), i + 1),
         }
     }
@@ -234,6 +237,20 @@ mod tests {
         assert_eq!(number(&line, "pieces_water.0.centroid.1").unwrap(), 0.5);
         let err = number(&line, "tips.min").unwrap_err().to_string();
         assert!(err.contains("'tips.min'"), "{err}");
+    }
+
+    #[test]
+    fn series_files_take_comments_a_header_and_refuse_bad_rows() {
+        let dir = std::env::temp_dir().join(format!("polyphase-series-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let good = dir.join("good.csv");
+        fs::write(&good, "# source\ntime,value\n0.1, 2.5\n\n0.2,3\n").unwrap();
+        assert_eq!(read_series(&good).unwrap(), vec![(0.1, 2.5), (0.2, 3.0)]);
+        let bad = dir.join("bad.csv");
+        fs::write(&bad, "time,value\n0.1,2.5\n0.2,x\n").unwrap();
+        let err = read_series(&bad).unwrap_err().to_string();
+        assert!(err.ends_with("bad.csv:3: expected `time,value`"), "{err}");
+        fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
