@@ -165,18 +165,7 @@ fn accumulate(total: &mut StepStats, step: &StepStats) {
     }
     total.cells = step.cells;
     total.interface_cells = step.interface_cells;
-    if total.volume_correction.len() < step.volume_correction.len() {
-        total
-            .volume_correction
-            .resize(step.volume_correction.len(), 0.0);
-    }
-    for (t, v) in total
-        .volume_correction
-        .iter_mut()
-        .zip(&step.volume_correction)
-    {
-        *t += v;
-    }
+    step.add_volume_correction_to(&mut total.volume_correction);
 }
 
 fn frame_line(

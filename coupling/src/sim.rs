@@ -274,18 +274,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         }
         report.cells = tracked.cells;
         report.interface_cells = tracked.interface_cells;
-        if report.volume_correction.len() < tracked.volume_correction.len() {
-            report
-                .volume_correction
-                .resize(tracked.volume_correction.len(), 0.0);
-        }
-        for (r, v) in report
-            .volume_correction
-            .iter_mut()
-            .zip(&tracked.volume_correction)
-        {
-            *r += v;
-        }
+        tracked.add_volume_correction_to(&mut report.volume_correction);
         report.tracker_steps += 1;
         Ok(())
     }

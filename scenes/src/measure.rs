@@ -5,6 +5,7 @@ use polyphase_grid::PhaseId;
 
 use crate::error::SceneError;
 use crate::format::MeasureSpec;
+use crate::scene::find_phase;
 
 /// What one measurement reads off the labeled mesh.
 #[derive(Clone, Debug, PartialEq)]
@@ -44,18 +45,8 @@ pub fn compile_measures(
     let mut out: Vec<Measure> = Vec::with_capacity(specs.len());
     for (i, spec) in specs.iter().enumerate() {
         let place = format!("measure[{i}]");
-        let phase_id = |name: &str, field: &str| -> Result<PhaseId, SceneError> {
-            phases
-                .iter()
-                .position(|p| p == name)
-                .map(|p| p as PhaseId)
-                .ok_or_else(|| {
-                    bad(
-                        &format!("{place}.{field}"),
-                        format!("unknown phase '{name}' (phases: {})", phases.join(", ")),
-                    )
-                })
-        };
+        let phase_id =
+            |name: &str, field: &str| find_phase(phases, name, &format!("{place}.{field}"), bad);
         let one_phase = || -> Result<(PhaseId, &str), SceneError> {
             let name = spec.phase.as_deref().ok_or_else(|| {
                 bad(

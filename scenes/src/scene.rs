@@ -103,18 +103,7 @@ impl Scene {
             ));
         }
         let phases = compile_phases(&file, &bad)?;
-        let find = |name: &str, place: &str| -> Result<PhaseId, SceneError> {
-            phases
-                .iter()
-                .position(|p| p == name)
-                .map(|i| i as PhaseId)
-                .ok_or_else(|| {
-                    bad(
-                        place,
-                        format!("unknown phase '{name}' (phases: {})", phases.join(", ")),
-                    )
-                })
-        };
+        let find = |name: &str, place: &str| find_phase(&phases, name, place, &bad);
         let background = find(&file.background, "background")?;
         let base = SceneBase::from_origin(origin);
         let mut shapes = file
@@ -334,6 +323,26 @@ fn one_line(s: &str) -> String {
 }
 
 type Bad<'a> = dyn Fn(&str, String) -> SceneError + 'a;
+
+/// The id of the phase called `name`; an unknown name is an error at `place` that lists the
+/// scene's phases.
+pub(crate) fn find_phase(
+    phases: &[String],
+    name: &str,
+    place: &str,
+    bad: &Bad,
+) -> Result<PhaseId, SceneError> {
+    phases
+        .iter()
+        .position(|p| p == name)
+        .map(|i| i as PhaseId)
+        .ok_or_else(|| {
+            bad(
+                place,
+                format!("unknown phase '{name}' (phases: {})", phases.join(", ")),
+            )
+        })
+}
 
 fn finite(v: f64, place: &str, bad: &Bad) -> Result<f64, SceneError> {
     if v.is_finite() {

@@ -22,6 +22,19 @@ pub struct StepStats {
     pub volume_correction: Vec<f64>,
 }
 
+impl StepStats {
+    /// Adds this step's per-phase volume correction into `total`, grown as needed: a frame's
+    /// sum over its steps.
+    pub fn add_volume_correction_to(&self, total: &mut Vec<f64>) {
+        if total.len() < self.volume_correction.len() {
+            total.resize(self.volume_correction.len(), 0.0);
+        }
+        for (t, v) in total.iter_mut().zip(&self.volume_correction) {
+            *t += v;
+        }
+    }
+}
+
 /// Why a step could not be taken.
 #[derive(Debug, Error, PartialEq)]
 pub enum TrackerError {
