@@ -2,14 +2,16 @@
 //! [`LabeledMesh`] (paper 004 §4, Algorithm 1): nearest point through a bounding-box tree,
 //! then the phase from the feature the nearest point lies on — face: sign of
 //! `E = (x − y) · n`; edge: the triangle around the (possibly non-manifold) edge with the
-//! largest `|E|`; vertex: per-phase angle-weighted pseudonormals (§4.1, Fig. 3).
+//! largest `|E|`; vertex: the paper's per-phase angle-weighted pseudonormals (§4.1, Fig. 3)
+//! fail where contouring folds a triple line, so the incident triangle nearest in angle to
+//! `x − y` decides instead ([`MeshQuery::nearest_in_angle`]).
 
 mod adjacency;
 mod bvh;
 mod triangle;
 
 use crate::mesh::LabeledMesh;
-use adjacency::{Edges, Pseudonormals};
+use adjacency::{Edges, Pseudonormals, VertexTriangles};
 use bvh::Bvh;
 use glam::DVec3;
 use polyphase_grid::{PhaseId, OUTSIDE};
@@ -63,7 +65,10 @@ pub struct MeshQuery {
     /// Source triangle index of each tree-order triangle.
     source: Vec<u32>,
     edges: Edges,
+    /// Smooth normals for the curved query.
     pseudonormals: Pseudonormals,
+    /// Triangles (tree order) around each source vertex, for the vertex case's indicator.
+    around: VertexTriangles,
 }
 
 impl MeshQuery {
@@ -101,6 +106,7 @@ impl MeshQuery {
         let edges = Edges::build(&triangles);
         let pseudonormals =
             Pseudonormals::build(mesh.vertices.len(), &triangles, &corners, &normals, &labels);
+        let around = VertexTriangles::build(mesh.vertices.len(), &triangles);
         let tris = corners
             .iter()
             .zip(&normals)
@@ -115,6 +121,7 @@ impl MeshQuery {
             source,
             edges,
             pseudonormals,
+            around,
         }
     }
 
@@ -239,6 +246,44 @@ impl MeshQuery {
         0.5 * offset.dot(normal)
     }
 
+    /// The triangle at vertex `v` nearest in angle to the direction `d` (on a small sphere
+    /// around `v`, each triangle is an arc): the region `d` points into is bounded by that
+    /// triangle, on the side `d · n` gives. Ties (the nearest point is an edge direction that
+    /// several triangles share) go to the largest `|d · n|`, the edge rule, then to the lowest
+    /// index. Per-phase pseudonormals (paper 004 §4.1) decide this only for regions that are
+    /// convex at `v`; a vertex on a triple line folded by contouring has reflex regions, where
+    /// they picked the wrong phase up to 0.4 away (`enright` 64³, issue 17).
+    fn nearest_in_angle(&self, v: u32, d: DVec3) -> Option<usize> {
+        let d = d.normalize_or_zero();
+        let mut best: Option<(f64, f64, usize)> = None;
+        for &s in self.around.of(v) {
+            let s = s as usize;
+            let Tri { corners, normal } = self.tris[s];
+            if normal == DVec3::ZERO {
+                continue;
+            }
+            let j = self.triangles[s].iter().position(|&u| u == v)?;
+            let u1 = (corners[(j + 1) % 3] - corners[j]).normalize_or_zero();
+            let u2 = (corners[(j + 2) % 3] - corners[j]).normalize_or_zero();
+            let dn = d.dot(normal);
+            let p = d - dn * normal;
+            // Inside the wedge u1 → u2 (counter-clockwise about the normal) the arc's nearest
+            // point is the foot of d on its great circle; outside, one of its ends.
+            let inside = u1.cross(p).dot(normal) >= 0.0 && p.cross(u2).dot(normal) >= 0.0;
+            let angle = if inside {
+                dn.abs().min(1.0).asin()
+            } else {
+                let c = d.dot(u1).max(d.dot(u2)).clamp(-1.0, 1.0);
+                c.acos()
+            };
+            let better = best.is_none_or(|(a, e, _)| angle < a || (angle == a && dn.abs() > e));
+            if better {
+                best = Some((angle, dn.abs(), s));
+            }
+        }
+        best.map(|(_, _, s)| s)
+    }
+
     /// Nearest point within squared distance `bound2` and its feature, with the indicator.
     /// Among triangles at exactly the same distance the lowest tree index wins, so the answer
     /// does not depend on the visiting order; the phase is then decided by the shared
@@ -299,15 +344,8 @@ impl MeshQuery {
             }
             Region::Vertex(k) => {
                 let v = self.triangles[t][k as usize];
-                let mut phase = self.labels[t][1];
-                let mut min_s = f64::INFINITY;
-                for &(p, n) in self.pseudonormals.of(v) {
-                    let s = (x - y).dot(n);
-                    if s < min_s {
-                        min_s = s;
-                        phase = p;
-                    }
-                }
+                let s = self.nearest_in_angle(v, x - y).unwrap_or(t);
+                let phase = side(s, (x - y).dot(self.tris[s].normal));
                 (phase, Feature::Vertex(v))
             }
         };

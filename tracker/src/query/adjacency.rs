@@ -51,6 +51,44 @@ impl Edges {
     }
 }
 
+/// The triangles around each vertex, in compressed-sparse-row layout, ascending.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct VertexTriangles {
+    offsets: Vec<u32>,
+    tris: Vec<u32>,
+}
+
+impl VertexTriangles {
+    /// Buckets each triangle under its three vertices (counting sort: deterministic, O(N)).
+    pub(crate) fn build(n_vertices: usize, triangles: &[[u32; 3]]) -> VertexTriangles {
+        let mut offsets = vec![0u32; n_vertices + 1];
+        for tri in triangles {
+            for &v in tri {
+                offsets[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..n_vertices {
+            offsets[v + 1] += offsets[v];
+        }
+        let mut fill = offsets.clone();
+        let mut tris = vec![0u32; triangles.len() * 3];
+        for (t, tri) in triangles.iter().enumerate() {
+            for &v in tri {
+                tris[fill[v as usize] as usize] = t as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        VertexTriangles { offsets, tris }
+    }
+
+    /// Triangles at vertex `v`, ascending.
+    #[inline]
+    pub(crate) fn of(&self, v: u32) -> &[u32] {
+        let v = v as usize;
+        &self.tris[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+    }
+}
+
 /// Per vertex, one unit angle-weighted pseudonormal per incident phase, pointing out of that
 /// phase (paper 004 §4.1, Fig. 3; Bærentzen & Aanæs): `N_p = Σ θ_t n_t` over the triangles
 /// `t` at the vertex that carry `p`, with `n_t` flipped when `p` is `t`'s front label.
