@@ -11,7 +11,7 @@ mod bvh;
 mod triangle;
 
 use crate::mesh::LabeledMesh;
-use adjacency::{Edges, Pseudonormals, VertexTriangles};
+use adjacency::{Edges, Pseudonormals, VertexCorners};
 use bvh::Bvh;
 use glam::DVec3;
 use polyphase_grid::{PhaseId, OUTSIDE};
@@ -67,8 +67,8 @@ pub struct MeshQuery {
     edges: Edges,
     /// Smooth normals for the curved query.
     pseudonormals: Pseudonormals,
-    /// Triangles (tree order) around each source vertex, for the vertex case's indicator.
-    around: VertexTriangles,
+    /// Triangle corners (tree order) at each source vertex, for the vertex case's indicator.
+    around: VertexCorners,
 }
 
 impl MeshQuery {
@@ -104,9 +104,8 @@ impl MeshQuery {
         let labels: Vec<[PhaseId; 2]> = source.iter().map(|&t| mesh.labels[t as usize]).collect();
         let triangles: Vec<[u32; 3]> = source.iter().map(|&t| mesh.triangles[t as usize]).collect();
         let edges = Edges::build(&triangles);
-        let pseudonormals =
-            Pseudonormals::build(mesh.vertices.len(), &triangles, &corners, &normals, &labels);
-        let around = VertexTriangles::build(mesh.vertices.len(), &triangles);
+        let around = VertexCorners::build(mesh.vertices.len(), &triangles);
+        let pseudonormals = Pseudonormals::build(&around, &corners, &normals, &labels);
         let tris = corners
             .iter()
             .zip(&normals)
@@ -256,13 +255,11 @@ impl MeshQuery {
     fn nearest_in_angle(&self, v: u32, d: DVec3) -> Option<usize> {
         let d = d.normalize_or_zero();
         let mut best: Option<(f64, f64, usize)> = None;
-        for &s in self.around.of(v) {
-            let s = s as usize;
+        for (s, j) in self.around.of(v) {
             let Tri { corners, normal } = self.tris[s];
             if normal == DVec3::ZERO {
                 continue;
             }
-            let j = self.triangles[s].iter().position(|&u| u == v)?;
             let u1 = (corners[(j + 1) % 3] - corners[j]).normalize_or_zero();
             let u2 = (corners[(j + 2) % 3] - corners[j]).normalize_or_zero();
             let dn = d.dot(normal);

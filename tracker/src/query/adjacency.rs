@@ -51,16 +51,17 @@ impl Edges {
     }
 }
 
-/// The triangles around each vertex, in compressed-sparse-row layout, ascending.
+/// The triangle corners at each vertex (corner `c = 3 t + k`: corner `k` of triangle `t`), in
+/// compressed-sparse-row layout, ascending.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct VertexTriangles {
+pub(crate) struct VertexCorners {
     offsets: Vec<u32>,
-    tris: Vec<u32>,
+    corners: Vec<u32>,
 }
 
-impl VertexTriangles {
-    /// Buckets each triangle under its three vertices (counting sort: deterministic, O(N)).
-    pub(crate) fn build(n_vertices: usize, triangles: &[[u32; 3]]) -> VertexTriangles {
+impl VertexCorners {
+    /// Buckets each corner under its vertex (counting sort: deterministic, O(N)).
+    pub(crate) fn build(n_vertices: usize, triangles: &[[u32; 3]]) -> VertexCorners {
         let mut offsets = vec![0u32; n_vertices + 1];
         for tri in triangles {
             for &v in tri {
@@ -71,21 +72,23 @@ impl VertexTriangles {
             offsets[v + 1] += offsets[v];
         }
         let mut fill = offsets.clone();
-        let mut tris = vec![0u32; triangles.len() * 3];
+        let mut corners = vec![0u32; triangles.len() * 3];
         for (t, tri) in triangles.iter().enumerate() {
-            for &v in tri {
-                tris[fill[v as usize] as usize] = t as u32;
+            for (k, &v) in tri.iter().enumerate() {
+                corners[fill[v as usize] as usize] = (3 * t + k) as u32;
                 fill[v as usize] += 1;
             }
         }
-        VertexTriangles { offsets, tris }
+        VertexCorners { offsets, corners }
     }
 
-    /// Triangles at vertex `v`, ascending.
+    /// (triangle, corner index in it) of every corner at vertex `v`, by ascending triangle.
     #[inline]
-    pub(crate) fn of(&self, v: u32) -> &[u32] {
+    pub(crate) fn of(&self, v: u32) -> impl Iterator<Item = (usize, usize)> + '_ {
         let v = v as usize;
-        &self.tris[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+        self.corners[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+            .iter()
+            .map(|&c| (c as usize / 3, c as usize % 3))
     }
 }
 
@@ -100,41 +103,22 @@ pub(crate) struct Pseudonormals {
 }
 
 impl Pseudonormals {
-    /// Builds the table for `n_vertices` vertices from triangles, their corner positions,
-    /// unit normals and `[front, back]` labels. Corners are bucketed by vertex (counting sort,
-    /// O(N)), then each vertex sums its contributions in (phase, triangle) order, in parallel
-    /// over vertices: the result does not depend on the thread count.
+    /// Builds the table for every vertex of `around` from the triangles' corner positions,
+    /// unit normals and `[front, back]` labels: each vertex sums its contributions in (phase,
+    /// triangle) order, in parallel over vertices, so the result does not depend on the
+    /// thread count.
     pub(crate) fn build(
-        n_vertices: usize,
-        triangles: &[[u32; 3]],
+        around: &VertexCorners,
         corners: &[[DVec3; 3]],
         normals: &[DVec3],
         labels: &[[PhaseId; 2]],
     ) -> Pseudonormals {
-        // Corner c = 3 t + k, bucketed by its vertex.
-        let mut start = vec![0u32; n_vertices + 1];
-        for tri in triangles {
-            for &v in tri {
-                start[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..n_vertices {
-            start[v + 1] += start[v];
-        }
-        let mut fill = start.clone();
-        let mut bucket = vec![0u32; triangles.len() * 3];
-        for (t, tri) in triangles.iter().enumerate() {
-            for (k, &v) in tri.iter().enumerate() {
-                bucket[fill[v as usize] as usize] = (3 * t + k) as u32;
-                fill[v as usize] += 1;
-            }
-        }
+        let n_vertices = around.offsets.len() - 1;
         let per_vertex: Vec<Vec<(PhaseId, DVec3)>> = (0..n_vertices)
             .into_par_iter()
             .map(|v| {
                 let mut contrib: Vec<(PhaseId, u32, DVec3)> = Vec::new();
-                for &c in &bucket[start[v] as usize..start[v + 1] as usize] {
-                    let (t, k) = (c as usize / 3, c as usize % 3);
+                for (t, k) in around.of(v as u32) {
                     let p = &corners[t];
                     let e1 = p[(k + 1) % 3] - p[k];
                     let e2 = p[(k + 2) % 3] - p[k];
@@ -159,7 +143,7 @@ impl Pseudonormals {
             .collect();
         let mut table = Pseudonormals {
             offsets: Vec::with_capacity(n_vertices + 1),
-            entries: Vec::with_capacity(triangles.len() * 2),
+            entries: Vec::with_capacity(corners.len() * 2),
         };
         for list in per_vertex {
             table.offsets.push(table.entries.len() as u32);
