@@ -186,16 +186,27 @@ mod tests {
 
     #[test]
     fn the_start_accelerates_at_agk_whatever_the_viscosity() {
-        // At rest there is no viscous stress, so a''(0) = Agk a₀ and a ≈ 1 + Agk t²/2 for
-        // t ≪ 1/(νk²); the next term is O(t³), 2e-4 relative at t = 0.02.
+        // At rest there is no viscous stress, so a''(0) = Agk a₀. Viscosity acts through a
+        // boundary layer of thickness √(νt) at the interface, so the amplitude falls short of
+        // 1 + Agk t²/2 by a fraction that grows like k√(νt): it doubles each time t quadruples
+        // and stays below k√(νt) (measured 0.47 k√(νt)), and vanishes as t → 0.
         let rt = setup(0.01);
-        let t = 0.02;
-        let expected = 1.0 + 0.5 * 0.5 * rt.k * t * t;
-        let ours = rt.amplitude_ratio(t);
-        assert!(
-            ((ours - 1.0) / (expected - 1.0) - 1.0).abs() < 0.03,
-            "{ours} vs {expected}"
-        );
+        let deficit = |t: f64| {
+            let inviscid = 0.5 * 0.5 * rt.k * t * t;
+            1.0 - (rt.amplitude_ratio(t) - 1.0) / inviscid
+        };
+        let ts = [0.00125, 0.005, 0.02];
+        for t in ts {
+            let d = deficit(t);
+            assert!(
+                d > 0.0 && d < rt.k * (0.01 * t).sqrt(),
+                "t {t}: deficit {d}"
+            );
+        }
+        for w in ts.windows(2) {
+            let ratio = deficit(w[1]) / deficit(w[0]);
+            assert!((ratio - 2.0).abs() < 0.2, "{w:?}: deficit ratio {ratio}");
+        }
     }
 
     #[test]
