@@ -4,6 +4,7 @@
 mod bench;
 mod bench_front;
 mod checkpoint;
+mod farm;
 mod measurements;
 mod output;
 mod render;
@@ -12,6 +13,7 @@ mod run_coupled;
 mod run_passive;
 mod summary;
 mod validate;
+mod wedge;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -56,6 +58,10 @@ enum Command {
         /// `polyphase render DIR` for other settings.
         #[arg(long)]
         render: bool,
+        /// Continue the output folder's killed run of the same scene from its checkpoint (or
+        /// leave a finished one alone) instead of starting over.
+        #[arg(long)]
+        resume: bool,
     },
     /// Continue a killed run from its last checkpoint; the frames come out byte-identical to
     /// an uninterrupted run's.
@@ -73,6 +79,21 @@ enum Command {
     /// Run the physics validation cases (validation/<case>/) and compare with their
     /// references; exits non-zero if any metric fails.
     Validate(validate::ValidateArgs),
+    /// Write a parameter wedge: one validated scene per combination of `--set` values, and an
+    /// index, into a new folder.
+    Wedge(wedge::WedgeArgs),
+    /// Farm out a wedge's variants, validation cases or a run's frames as a Slurm job array.
+    Submit(farm::SubmitArgs),
+    /// Show which tasks of a farmed folder's Slurm job finished, failed, run or wait.
+    Status(farm::StatusArgs),
+    /// One task of a farmed job (what each Slurm array task runs).
+    #[command(hide = true)]
+    Task {
+        /// The job's `slurm/` folder.
+        dir: PathBuf,
+        /// The task's index in the array.
+        index: usize,
+    },
     /// Measure the stages and print tables shaped like the papers'.
     Bench {
         #[command(subcommand)]
@@ -81,8 +102,20 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    let result = match cli.command {
+    let result = dispatch(Cli::parse().command);
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
+            eprintln!("error: {}", chain.join(": "));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Runs one command.
+fn dispatch(command: Command) -> anyhow::Result<()> {
+    match command {
         Command::Run {
             scene,
             out,
@@ -91,6 +124,7 @@ fn main() -> ExitCode {
             tracker,
             threads,
             render,
+            resume,
         } => with_threads(threads, || {
             run::run(&run::RunOptions {
                 scene,
@@ -98,6 +132,7 @@ fn main() -> ExitCode {
                 resolution,
                 frames,
                 tracker,
+                resume,
             })
         })
         .and_then(|root| match render {
@@ -112,14 +147,15 @@ fn main() -> ExitCode {
         }
         Command::Bench { what } => bench::bench(what),
         Command::Validate(args) => validate::validate(&args),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
-            eprintln!("error: {}", chain.join(": "));
-            ExitCode::FAILURE
-        }
+        Command::Wedge(args) => wedge::wedge(&args),
+        Command::Submit(args) => farm::submit(&args),
+        Command::Status(args) => farm::status(&args),
+        Command::Task { dir, index } => farm::task(&dir, index, |args| {
+            let cli = Cli::try_parse_from(
+                std::iter::once("polyphase".to_string()).chain(args.iter().cloned()),
+            )?;
+            dispatch(cli.command)
+        }),
     }
 }
 

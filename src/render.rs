@@ -77,24 +77,47 @@ impl RenderArgs {
     }
 }
 
+impl RenderArgs {
+    /// The `polyphase render …` command line (without the program name) for these options.
+    pub fn to_cli(&self) -> Vec<String> {
+        let mut args = vec![
+            "render".to_string(),
+            self.dir.display().to_string(),
+            "--frames".into(),
+            self.frames.clone(),
+            "--width".into(),
+            self.width.to_string(),
+            "--height".into(),
+            self.height.to_string(),
+            "--spp".into(),
+            self.spp.to_string(),
+            "--variant".into(),
+            self.variant.clone(),
+        ];
+        let flags = [
+            (self.no_movie, "--no-movie"),
+            (self.no_plots, "--no-plots"),
+            (self.volume, "--volume"),
+            (self.tank, "--tank"),
+            (self.no_tank, "--no-tank"),
+        ];
+        args.extend(flags.iter().filter(|f| f.0).map(|f| f.1.to_string()));
+        if let Some(n) = self.vol {
+            args.extend(["--vol".to_string(), n.to_string()]);
+        }
+        if let Some(p) = &self.python {
+            args.extend(["--python".to_string(), p.display().to_string()]);
+        }
+        args
+    }
+}
+
 /// Exit status of the pipeline when some frames were bad or missing (the rest rendered).
 const SOME_FRAMES_BAD: i32 = 1;
 
 /// Renders the run folder `args.dir`.
 pub fn render(args: &RenderArgs) -> Result<()> {
-    check_run_folder(&args.dir)?;
-    let render_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("render");
-    anyhow::ensure!(
-        render_dir.join("polyphase_render").is_dir(),
-        "render scripts not found at {} (polyphase render runs from a source checkout)",
-        render_dir.display()
-    );
-    let base_python = args
-        .python
-        .clone()
-        .or_else(|| std::env::var_os("POLYPHASE_PYTHON").map(PathBuf::from))
-        .unwrap_or_else(|| PathBuf::from("python3"));
-    let python = ensure_venv(&render_dir, &base_python)?;
+    let (render_dir, python) = prepare(args)?;
     let dir = fs::canonicalize(&args.dir)
         .with_context(|| format!("cannot resolve {}", args.dir.display()))?;
     let mut cmd = Command::new(&python);
@@ -134,6 +157,50 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         Some(code) => bail!("render failed (exit status {code}, see the message above)"),
         None => bail!("render was killed by a signal"),
     }
+}
+
+/// Checks the run folder and makes the render environment ready (creating `render/.venv` on
+/// first use); returns the scripts' folder and the environment's interpreter.
+pub fn prepare(args: &RenderArgs) -> Result<(PathBuf, PathBuf)> {
+    check_run_folder(&args.dir)?;
+    let render_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("render");
+    anyhow::ensure!(
+        render_dir.join("polyphase_render").is_dir(),
+        "render scripts not found at {} (polyphase render runs from a source checkout)",
+        render_dir.display()
+    );
+    let base_python = args
+        .python
+        .clone()
+        .or_else(|| std::env::var_os("POLYPHASE_PYTHON").map(PathBuf::from))
+        .unwrap_or_else(|| PathBuf::from("python3"));
+    let python = ensure_venv(&render_dir, &base_python)?;
+    Ok((render_dir, python))
+}
+
+/// The frame numbers of a run folder's `frames/NNNN.ply`, ascending.
+pub fn frames_on_disk(dir: &Path) -> Result<Vec<usize>> {
+    check_run_folder(dir)?;
+    let frames = dir.join("frames");
+    let mut found: Vec<usize> = fs::read_dir(&frames)
+        .with_context(|| format!("cannot read {}", frames.display()))?
+        .flatten()
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let stem = name.strip_suffix(".ply")?;
+            stem.bytes()
+                .all(|b| b.is_ascii_digit())
+                .then(|| stem.parse().ok())
+                .flatten()
+        })
+        .collect();
+    found.sort_unstable();
+    anyhow::ensure!(
+        !found.is_empty(),
+        "{} has no NNNN.ply frames",
+        frames.display()
+    );
+    Ok(found)
 }
 
 /// Fails with one line unless `dir` looks like a run folder.

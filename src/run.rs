@@ -21,6 +21,9 @@ pub struct RunOptions {
     pub resolution: Option<i64>,
     pub frames: Option<i64>,
     pub tracker: Option<TrackerKind>,
+    /// Continue the output folder's killed run of the same scene from its checkpoint, or
+    /// leave a finished one alone, instead of starting over (a re-queued farm task).
+    pub resume: bool,
 }
 
 /// Runs a scene to its end time and returns its output folder. Everything about the input is
@@ -40,8 +43,21 @@ pub fn run(opts: &RunOptions) -> Result<PathBuf> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.file.name));
-    let folder = RunFolder::create(&root)?;
     let toml = scene.to_toml();
+    if opts.resume && same_scene(&root, &toml) {
+        match RunFolder::open(&root).read_checkpoint() {
+            Ok(Some(c)) if finished(&RunFolder::open(&root), &scene, &c)? => {
+                eprintln!("the run in {} is finished; nothing to do", root.display());
+                return Ok(root);
+            }
+            Ok(Some(_)) => {
+                resume(&root)?;
+                return Ok(root);
+            }
+            _ => {}
+        }
+    }
+    let folder = RunFolder::create(&root)?;
     folder.write("scene.toml", toml.as_bytes())?;
     let start = Start::Fresh(scene_hash(toml.as_bytes()));
     if scene.is_coupled() {
@@ -74,12 +90,8 @@ pub fn resume(dir: &Path) -> Result<()> {
         scene_path.display()
     );
     let frames = scene.file.time.frames as usize;
-    let finished = folder
-        .stats_lines()?
-        .iter()
-        .any(|l| serde_json::from_str::<Value>(l).is_ok_and(|v| v.get("summary").is_some()));
     anyhow::ensure!(
-        !(checkpoint.frame >= frames && finished),
+        !finished(&folder, &scene, &checkpoint)?,
         "the run in {} is finished ({frames} frames); nothing to resume",
         dir.display()
     );
@@ -94,6 +106,20 @@ pub fn resume(dir: &Path) -> Result<()> {
         return crate::run_coupled::run_coupled(&scene, &folder, dir, start);
     }
     crate::run_passive::run_passive(&scene, &folder, dir, start)
+}
+
+/// True when the folder's `scene.toml` is `toml` (the run there is of this very scene).
+fn same_scene(root: &Path, toml: &str) -> bool {
+    fs::read_to_string(root.join("scene.toml")).is_ok_and(|t| t == toml)
+}
+
+/// True when the run reached its last frame and wrote its summary.
+fn finished(folder: &RunFolder, scene: &Scene, checkpoint: &Checkpoint) -> Result<bool> {
+    let summary = folder
+        .stats_lines()?
+        .iter()
+        .any(|l| serde_json::from_str::<Value>(l).is_ok_and(|v| v.get("summary").is_some()));
+    Ok(summary && checkpoint.frame >= scene.file.time.frames as usize)
 }
 
 /// Where a run starts: at frame 0 (with the fingerprint of its `scene.toml`), or after a

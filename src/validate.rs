@@ -80,6 +80,21 @@ fn find_case(arg: &str, dir: &Path) -> Result<PathBuf> {
     )
 }
 
+/// The cases named on the command line (names under `validation/` or case folders), loaded;
+/// every shipped case when none is named.
+pub(crate) fn load_cases(names: &[String]) -> Result<Vec<Case>> {
+    let dir = cases_dir();
+    let folders = if names.is_empty() {
+        all_cases(&dir)?
+    } else {
+        names
+            .iter()
+            .map(|c| find_case(c, &dir))
+            .collect::<Result<_>>()?
+    };
+    folders.iter().map(|f| Case::load(f)).collect()
+}
+
 /// One case's run and results; a case that cannot run is one failed row with the reason.
 struct CaseResult {
     case: Case,
@@ -88,19 +103,7 @@ struct CaseResult {
 
 /// Runs the cases, prints the table, writes the JSON, and fails if any metric failed.
 pub fn validate(args: &ValidateArgs) -> Result<()> {
-    let dir = cases_dir();
-    let folders = if args.cases.is_empty() {
-        all_cases(&dir)?
-    } else {
-        args.cases
-            .iter()
-            .map(|c| find_case(c, &dir))
-            .collect::<Result<_>>()?
-    };
-    let cases: Vec<Case> = folders
-        .iter()
-        .map(|f| Case::load(f))
-        .collect::<Result<_>>()?;
+    let cases = load_cases(&args.cases)?;
     // A JSON file that cannot be written is refused before any case runs.
     if let Some(json) = &args.json {
         let parent = json
@@ -162,6 +165,7 @@ fn run_case(case: &Case, out: &Path, quick: bool) -> Result<Vec<Outcome>> {
         resolution,
         frames: None,
         tracker: None,
+        resume: false,
     })
     .with_context(|| format!("case '{}'", case.name))?;
     let resolved = root.join("scene.toml");

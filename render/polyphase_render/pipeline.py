@@ -56,18 +56,23 @@ def run(opts: Options, log) -> int:
     present, missing = frames_mod.select(found, opts.frames, expected_last)
     bad = [(f"frames/{n:04d}.ply", "missing") for n in missing]
 
-    # Read every frame once up front: validates them and frames the camera on all of them.
+    # Read every frame on disk once up front: validates the selected ones, and frames the
+    # camera (and sizes the absorption) on all of them, so a frame rendered alone (a farmed
+    # frame range) is the same image as in a render of the whole run.
     good, lo, hi, liquid = [], None, None, None
     from .build import content_box
     from .geometry import phase_volumes
 
-    for n in present:
+    selected = set(present)
+    for n in sorted(found):
         try:
             mesh = read_ply(found[n])
         except PlyError as e:
-            bad.append((f"frames/{n:04d}.ply", str(e)))
+            if n in selected:
+                bad.append((f"frames/{n:04d}.ply", str(e)))
             continue
-        good.append(n)
+        if n in selected:
+            good.append(n)
         if liquid is None:
             vols = [v for i, v in enumerate(phase_volumes(mesh, len(scene.phases)))
                     if i != scene.background and i not in scene.opaque_ids() and v > 0]
