@@ -79,13 +79,11 @@ pub fn submit(args: &SubmitArgs) -> Result<()> {
             ("validate", out, tasks)
         }
         SubmitWhat::Render { render, per_task } => {
-            // The tasks would race to create the render environment: create it here, once.
+            let tasks = render_tasks(render, *per_task)?;
+            // The tasks would wait on each other to create the render environment: create it
+            // here, once.
             crate::render::prepare(render)?;
-            (
-                "render",
-                render.dir.clone(),
-                render_tasks(render, *per_task)?,
-            )
+            ("render", render.dir.clone(), tasks)
         }
     };
     let root = absolute(&root)?;
@@ -175,7 +173,7 @@ fn wedge_tasks(dir: &Path) -> Result<Vec<Task>> {
         .variants
         .iter()
         .map(|v| Task {
-            label: format!("{} {}", v.name, v.label()),
+            label: format!("{} {}", v.name, v.label(" ")),
             args: vec![
                 "run".into(),
                 v.scene_file(&dir).display().to_string(),

@@ -8,10 +8,13 @@ use std::process::{Command, Stdio};
 
 use anyhow::{bail, Context, Result};
 
+mod sheet;
+
 /// Options of `polyphase render`; passed through to the Python pipeline.
 #[derive(clap::Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Run folder written by `polyphase run` (with scene.toml and frames/).
+    /// Run folder written by `polyphase run` (with scene.toml and frames/), or a wedge folder
+    /// (`polyphase wedge`): then a contact sheet of one frame per variant, `DIR/sheet.png`.
     pub dir: PathBuf,
     /// Frames to render: `all`, `N`, `A-B` or a comma list such as `0-10,12`.
     #[arg(long, default_value = "all")]
@@ -117,6 +120,10 @@ const SOME_FRAMES_BAD: i32 = 1;
 
 /// Renders the run folder `args.dir`.
 pub fn render(args: &RenderArgs) -> Result<()> {
+    if sheet::is_wedge(&args.dir) {
+        return sheet::render_sheet(args);
+    }
+    check_run_folder(&args.dir)?;
     let (render_dir, python) = prepare(args)?;
     let dir = fs::canonicalize(&args.dir)
         .with_context(|| format!("cannot resolve {}", args.dir.display()))?;
@@ -159,10 +166,9 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     }
 }
 
-/// Checks the run folder and makes the render environment ready (creating `render/.venv` on
-/// first use); returns the scripts' folder and the environment's interpreter.
+/// Makes the render environment ready (creating `render/.venv` on first use); returns the
+/// scripts' folder and the environment's interpreter.
 pub fn prepare(args: &RenderArgs) -> Result<(PathBuf, PathBuf)> {
-    check_run_folder(&args.dir)?;
     let render_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("render");
     anyhow::ensure!(
         render_dir.join("polyphase_render").is_dir(),

@@ -16,7 +16,7 @@ use polyphase_scenes::{Scene, SceneFile};
 use toml::Value;
 
 use crate::output::write_atomic;
-pub use index::{Axis, Setting, Variant, WedgeIndex};
+pub use index::{Axis, Setting, Variant, WedgeIndex, FILE as INDEX_FILE};
 use set::{set_path, SetAxis};
 
 /// The most variants one wedge may have (a typo such as `1,2,…` repeated is caught early).
@@ -74,7 +74,7 @@ pub fn wedge(args: &WedgeArgs) -> Result<()> {
     };
     write(args, &index, &texts)?;
     for v in &index.variants {
-        println!("{:<20} {}", v.name, v.label());
+        println!("{:<20} {}", v.name, v.label(" "));
     }
     println!(
         "wrote {} variants to {} (run one with `polyphase run {}`, all with `polyphase submit \

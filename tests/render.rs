@@ -100,7 +100,7 @@ fn write_empty_ply(path: &Path) {
 #[test]
 fn tiny_frame_shows_the_liquids() {
     // Frame 0 of the run, and frame 1 emptied: both rendered in one call share the camera
-    // (framed on all rendered frames), so their difference is where the liquids project.
+    // (framed on every frame of the run), so their difference is where the liquids project.
     let dir = copy_run("render_tiny", &[0]);
     write_empty_ply(&dir.join("frames/0001.ply"));
     let o = render(&dir, "0-1");

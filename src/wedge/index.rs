@@ -44,13 +44,13 @@ pub struct Setting {
 }
 
 impl Variant {
-    /// `path=value` pairs joined by spaces, for tables and labels.
-    pub fn label(&self) -> String {
+    /// `path=value` pairs joined by `sep`, for tables and labels.
+    pub fn label(&self, sep: &str) -> String {
         self.settings
             .iter()
             .map(|s| format!("{}={}", s.path, s.value))
             .collect::<Vec<_>>()
-            .join(" ")
+            .join(sep)
     }
 
     /// The variant's resolved scene file.
