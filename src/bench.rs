@@ -43,6 +43,25 @@ pub enum BenchCommand {
         #[arg(long)]
         only: Option<polyphase_scenes::TrackerKind>,
     },
+    /// A coupled scene at several resolutions, each run in its own process: seconds per frame
+    /// per stage, start-up, peak memory and CPU use.
+    Coupled {
+        /// Built-in scene name or scene file (a coupled one).
+        #[arg(long, default_value = "dambreak")]
+        scene: String,
+        /// Tracker resolutions (the solver keeps the scene's ratio), comma separated.
+        #[arg(long, value_delimiter = ',', default_value = "64,128")]
+        res: Vec<i64>,
+        /// Frames to run (default: the scene's).
+        #[arg(long)]
+        frames: Option<i64>,
+        /// Worker threads of each run (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Folder for the runs (default: out/bench-coupled).
+        #[arg(long, default_value = "out/bench-coupled")]
+        out: PathBuf,
+    },
     /// Pressure and viscosity solves of a two-phase 1000:1 sphere, MIC(0)-PCG vs multigrid-PCG.
     Solver {
         /// Resolutions, comma separated.
@@ -94,6 +113,13 @@ pub fn bench(cmd: BenchCommand) -> Result<()> {
             steps,
             only,
         } => crate::bench_front::run(&scene, &res, steps, only),
+        BenchCommand::Coupled {
+            scene,
+            res,
+            frames,
+            threads,
+            out,
+        } => crate::bench_coupled::run(&scene, &res, frames, threads, &out),
         BenchCommand::Solver { res } => {
             let rows = polyphase_solver::bench::run(&res)?;
             println!("{}", polyphase_solver::bench::format_table(&rows));

@@ -2,12 +2,14 @@
 #![deny(unsafe_code)]
 
 mod bench;
+mod bench_coupled;
 mod bench_front;
 mod checkpoint;
 mod farm;
 mod measurements;
 mod output;
 mod render;
+mod resources;
 mod run;
 mod run_coupled;
 mod run_passive;

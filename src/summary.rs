@@ -128,6 +128,10 @@ impl Summary {
                 "stage_s": stages,
                 "volume_drift": drift,
                 "mesh": { "vertices": self.vertices, "triangles": self.triangles },
+                "process": {
+                    "peak_rss_mb": crate::resources::peak_rss_bytes().map(|b| b as f64 / 1e6),
+                    "cpu_s": crate::resources::cpu_seconds(),
+                },
             }
         })
     }

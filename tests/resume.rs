@@ -66,6 +66,7 @@ fn stats_without_timings(dir: &Path) -> Vec<Value> {
             }
             if let Some(s) = v.get_mut("summary").and_then(Value::as_object_mut) {
                 s.remove("wall_s");
+                s.remove("process");
                 s.remove("stage_s");
             }
             v
