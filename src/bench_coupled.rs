@@ -179,7 +179,12 @@ mod tests {
             cpu: Some(15.0),
         };
         let text = table(&[row]);
-        let cells: Vec<&str> = text.lines().nth(2).expect("a row").split_whitespace().collect();
+        let cells: Vec<&str> = text
+            .lines()
+            .nth(2)
+            .expect("a row")
+            .split_whitespace()
+            .collect();
         // 10 s wall, 7.4 s in stages: 2.6 s start-up; stages over 4 frames; tracker = build +
         // contour + redistance = 4 s (1 s a frame), solver = pressure + viscosity = 3 s.
         assert_eq!(&cells[..6], ["64", "32", "4", "40", "10.0", "2.6"]);

@@ -55,8 +55,8 @@ enum SubmitWhat {
         out: Option<PathBuf>,
     },
     /// Every frame of a run folder, `--per-task` frames a task, into `DIR/render/` as
-    /// `polyphase render DIR` would (movie and plots: `polyphase render DIR` once more, or
-    /// locally).
+    /// `polyphase render DIR` would; then one more job, once every frame rendered, makes the
+    /// movie and plots from them (`polyphase render DIR --only-missing`).
     Render {
         #[command(flatten)]
         render: RenderArgs,
@@ -69,6 +69,7 @@ enum SubmitWhat {
 /// Writes the job's script and description, submits it, and prints the job id.
 pub fn submit(args: &SubmitArgs) -> Result<()> {
     args.slurm.check()?;
+    let mut finish = None;
     let (kind, root, tasks) = match &args.what {
         SubmitWhat::Wedge { dir } => ("wedge", dir.clone(), wedge_tasks(dir)?),
         SubmitWhat::Validate { cases, quick, out } => {
@@ -80,6 +81,7 @@ pub fn submit(args: &SubmitArgs) -> Result<()> {
         }
         SubmitWhat::Render { render, per_task } => {
             let tasks = render_tasks(render, *per_task)?;
+            finish = finish_task(render)?;
             // The tasks would wait on each other to create the render environment: create it
             // here, once.
             crate::render::prepare(render)?;
@@ -108,24 +110,20 @@ pub fn submit(args: &SubmitArgs) -> Result<()> {
         kind: kind.to_string(),
         job_id: None,
         tasks,
+        finish,
+        finish_id: None,
     };
     fs::create_dir_all(&files.dir)
         .with_context(|| format!("cannot create {}", files.dir.display()))?;
-    for k in 0..job.tasks.len().max(old_task_count(&files)) {
+    for k in 0..(job.tasks.len() + 1).max(old_task_count(&files)) {
         fs::remove_file(files.record(k)).ok();
         fs::remove_file(files.log(k)).ok();
     }
     files.write_job(&job)?;
     let program = std::env::current_exe().context("cannot find this program's path")?;
     let workdir = std::env::current_dir().context("cannot read the working directory")?;
-    let text = sbatch::script(
-        kind,
-        job.tasks.len(),
-        &files,
-        &program,
-        &workdir,
-        &args.slurm,
-    );
+    let shape = sbatch::Shape::Array(job.tasks.len());
+    let text = sbatch::script(kind, shape, &files, &program, &workdir, &args.slurm);
     crate::output::write_atomic(&files.script(), text.as_bytes())?;
     let id = sbatch::submit(&files.script())?;
     job.job_id = Some(id.clone());
@@ -135,7 +133,36 @@ pub fn submit(args: &SubmitArgs) -> Result<()> {
         job.tasks.len(),
         root.display()
     );
+    if job.finish.is_some() {
+        let shape = sbatch::Shape::After {
+            index: job.tasks.len(),
+            after: &id,
+        };
+        let name = format!("{kind}-finish");
+        let text = sbatch::script(&name, shape, &files, &program, &workdir, &args.slurm);
+        let path = files.dir.join("finish.sbatch");
+        crate::output::write_atomic(&path, text.as_bytes())?;
+        let finish_id = sbatch::submit(&path)?;
+        println!("submitted job {finish_id}: the movie and plots, once job {id} succeeded");
+        job.finish_id = Some(finish_id);
+        files.write_job(&job)?;
+    }
     Ok(())
+}
+
+/// The task that makes a farmed render's movie and plots from its frames (rendering any that
+/// are missing), unless both are switched off.
+fn finish_task(render: &RenderArgs) -> Result<Option<Task>> {
+    if render.no_movie && render.no_plots {
+        return Ok(None);
+    }
+    let mut task = render.clone();
+    task.dir = absolute(&render.dir)?;
+    task.only_missing = true;
+    Ok(Some(Task {
+        label: "movie and plots".into(),
+        args: task.to_cli(),
+    }))
 }
 
 /// The number of `task-K.*` files a previous job left (so a smaller job clears them all).
@@ -254,9 +281,8 @@ pub fn task(slurm_dir: &Path, k: usize, run: impl FnOnce(&[String]) -> Result<()
     };
     let job = files.read_job()?;
     let task = job
-        .tasks
-        .get(k)
-        .with_context(|| format!("the job has {} tasks, no task {k}", job.tasks.len()))?;
+        .task(k)
+        .with_context(|| format!("the job has no task {k}"))?;
     fs::remove_file(files.record(k)).ok();
     eprintln!("task {k}: polyphase {}", task.args.join(" "));
     let start = Instant::now();
@@ -331,50 +357,65 @@ fn is_active(state: &str) -> bool {
     ) || matches!(state, "RUNNING" | "COMPLETING" | "STAGE_OUT")
 }
 
-/// Each task's state: Slurm's while it is queued or running, else its record, else Slurm's
-/// end state (a task killed with its node leaves no record), else lost.
+/// Each task's state, the finishing task last.
 fn task_rows(job: &Job, files: &JobFiles) -> Vec<Row> {
     let slurm = job
         .job_id
         .as_deref()
         .map(queue::task_states)
         .unwrap_or_default();
-    (0..job.tasks.len())
+    let mut rows: Vec<Row> = (0..job.tasks.len())
         .map(|k| {
-            let slurm_state = slurm.get(&k).map(String::as_str);
-            let last_line = || files.last_error_line(k).unwrap_or_default();
-            match (slurm_state, files.read_record(k)) {
-                (Some(s), _) if is_active(s) => Row {
-                    state: if s == "RUNNING" || s == "COMPLETING" {
-                        State::Running
-                    } else {
-                        State::Pending
-                    },
-                    detail: s.to_ascii_lowercase(),
-                },
-                (_, Some(r)) if r.exit == 0 => Row {
-                    state: State::Done,
-                    detail: format!("{:.1} s", r.seconds),
-                },
-                (_, Some(r)) => Row {
-                    state: State::Failed,
-                    detail: r.error.unwrap_or_else(last_line),
-                },
-                (Some(s), None) => Row {
-                    state: State::Failed,
-                    detail: format!("{s} without a record: {}", last_line()),
-                },
-                (None, None) if job.job_id.is_none() => Row {
-                    state: State::NotSubmitted,
-                    detail: String::new(),
-                },
-                (None, None) => Row {
-                    state: State::Failed,
-                    detail: format!("lost (not queued, no record): {}", last_line()),
-                },
-            }
+            row(
+                files,
+                k,
+                slurm.get(&k).map(String::as_str),
+                job.job_id.is_some(),
+            )
         })
-        .collect()
+        .collect();
+    if job.finish.is_some() {
+        let state = job.finish_id.as_deref().and_then(queue::job_state);
+        let k = job.tasks.len();
+        rows.push(row(files, k, state.as_deref(), job.finish_id.is_some()));
+    }
+    rows
+}
+
+/// Task `k`'s state: Slurm's while it is queued or running, else its record, else Slurm's end
+/// state (a task killed with its node leaves no record), else lost.
+fn row(files: &JobFiles, k: usize, slurm: Option<&str>, submitted: bool) -> Row {
+    let last_line = || files.last_error_line(k).unwrap_or_default();
+    match (slurm, files.read_record(k)) {
+        (Some(s), _) if is_active(s) => Row {
+            state: if s == "RUNNING" || s == "COMPLETING" {
+                State::Running
+            } else {
+                State::Pending
+            },
+            detail: s.to_ascii_lowercase(),
+        },
+        (_, Some(r)) if r.exit == 0 => Row {
+            state: State::Done,
+            detail: format!("{:.1} s", r.seconds),
+        },
+        (_, Some(r)) => Row {
+            state: State::Failed,
+            detail: r.error.unwrap_or_else(last_line),
+        },
+        (Some(s), None) => Row {
+            state: State::Failed,
+            detail: format!("{s} without a record: {}", last_line()),
+        },
+        (None, None) if !submitted => Row {
+            state: State::NotSubmitted,
+            detail: String::new(),
+        },
+        (None, None) => Row {
+            state: State::Failed,
+            detail: format!("lost (not queued, no record): {}", last_line()),
+        },
+    }
 }
 
 /// The status table.
@@ -390,13 +431,13 @@ fn table(job: &Job, rows: &[Row]) -> String {
         count(State::Running),
         count(State::Pending),
     );
-    let width = job.tasks.iter().map(|t| t.label.len()).max().unwrap_or(4);
+    let width = job.all_tasks().map(|t| t.label.len()).max().unwrap_or(4);
     let _ = writeln!(
         out,
         "{:<5} {:<8} {:<width$}  detail",
         "task", "state", "what"
     );
-    for (k, (task, row)) in job.tasks.iter().zip(rows).enumerate() {
+    for (k, (task, row)) in job.all_tasks().zip(rows).enumerate() {
         let state = match row.state {
             State::Done => "done",
             State::Failed => "failed",

@@ -38,6 +38,10 @@ pub struct RenderArgs {
     /// Do not plot `stats.jsonl`.
     #[arg(long)]
     pub no_plots: bool,
+    /// Render only the frames whose EXR or PNG is missing and keep the others, e.g. to make
+    /// the movie and plots of a farmed render, or to finish a killed one.
+    #[arg(long)]
+    pub only_missing: bool,
     /// Also export per-phase occupancy grids as Mitsuba `.vol` files, N voxels along the
     /// longest domain axis.
     #[arg(long, value_name = "N")]
@@ -71,6 +75,7 @@ impl RenderArgs {
             variant: "auto".into(),
             no_movie: false,
             no_plots: false,
+            only_missing: false,
             vol: None,
             volume: false,
             tank: false,
@@ -100,6 +105,7 @@ impl RenderArgs {
         let flags = [
             (self.no_movie, "--no-movie"),
             (self.no_plots, "--no-plots"),
+            (self.only_missing, "--only-missing"),
             (self.volume, "--volume"),
             (self.tank, "--tank"),
             (self.no_tank, "--no-tank"),
@@ -142,6 +148,9 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     }
     if args.no_plots {
         cmd.arg("--no-plots");
+    }
+    if args.only_missing {
+        cmd.arg("--only-missing");
     }
     if let Some(n) = args.vol {
         cmd.args(["--vol", &n.to_string()]);

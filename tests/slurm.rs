@@ -352,12 +352,13 @@ fn wedge_and_render_farmed_on_slurm_match_local_runs() {
     args.extend(small);
     let out = cluster.polyphase(&root, &args);
     assert!(out.contains("4 render task(s)"), "{out}");
+    assert!(out.contains("the movie and plots, once job"), "{out}");
     let status = cluster.wait(&run0, Duration::from_secs(900));
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stdout)
-    );
+    let table = String::from_utf8_lossy(&status.stdout);
+    assert!(status.status.success(), "{table}");
+    // The finishing job ran after the four frames and plotted the run's stats.
+    assert!(table.contains("5 done, 0 failed"), "{table}");
+    assert!(run0.join("plots/volumes.png").is_file(), "{table}");
     let mine = local.join("rayleigh_taylor-0");
     let mut args = vec![
         "render",

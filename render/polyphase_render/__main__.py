@@ -23,6 +23,7 @@ def parse_args(argv):
     p.add_argument("--variant", default="auto", help="Mitsuba variant: auto (llvm_ad_rgb if it works, else scalar_rgb), scalar_rgb, llvm_ad_rgb")
     p.add_argument("--no-movie", action="store_true", help="do not assemble movie.mp4")
     p.add_argument("--no-plots", action="store_true", help="do not plot stats.jsonl")
+    p.add_argument("--only-missing", action="store_true", help="render only the frames whose EXR or PNG is missing; keep the others (for the movie)")
     p.add_argument("--vol", type=int, default=0, metavar="N", help="also export per-phase occupancy grids as Mitsuba .vol files, N voxels along the longest axis")
     p.add_argument("--volume", action="store_true", help="render the phases voxelised (.vol grids, --vol voxels, default 64) as coloured smoke into DIR/render/volume, for debugging")
     tank = p.add_mutually_exclusive_group()
@@ -41,6 +42,7 @@ def parse_args(argv):
     return Options(
         run_dir=a.dir, frames=frames, width=a.width, height=a.height, spp=a.spp, variant=a.variant,
         movie=not a.no_movie, plots=not a.no_plots, vol=a.vol, volume=a.volume, tank=a.tank,
+        only_missing=a.only_missing,
     )
 
 

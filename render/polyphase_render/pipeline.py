@@ -34,6 +34,7 @@ class Options:
     vol: int = 0  # 0: no .vol export, else voxels along the longest axis
     volume: bool = False  # render the voxelised phases as a coloured smoke instead of surfaces
     tank: Optional[bool] = None  # None: from the scene's hints
+    only_missing: bool = False  # keep frames whose EXR and PNG exist (a farmed render's finish)
 
 
 def _bad_text(bad) -> str:
@@ -106,6 +107,12 @@ def run(opts: Options, log) -> int:
     pngs, render_secs = [], []
     for n in good:
         label = f"frame {n:04d}"
+        exr = os.path.join(out_dir, f"{n:04d}.exr")
+        png = os.path.join(out_dir, f"{n:04d}.png")
+        if opts.only_missing and os.path.isfile(exr) and os.path.isfile(png):
+            pngs.append(png)
+            bar.step(label + " kept")
+            continue
         try:
             mesh = read_ply(found[n])
             t0 = time.monotonic()
@@ -122,8 +129,6 @@ def run(opts: Options, log) -> int:
             mscene = mi.load_dict(d)
             img = np.array(mi.render(mscene, spp=opts.spp))
             render_secs.append(time.monotonic() - t0)
-            exr = os.path.join(out_dir, f"{n:04d}.exr")
-            png = os.path.join(out_dir, f"{n:04d}.png")
             write_outputs(img, exr, png)
             pngs.append(png)
         except (PlyError, RuntimeError, OSError, ValueError) as e:
@@ -151,7 +156,7 @@ def run(opts: Options, log) -> int:
 
     if render_secs:
         log(
-            f"rendered {len(pngs)} frame(s) in {bar.elapsed():.1f} s "
+            f"rendered {len(render_secs)} frame(s) in {bar.elapsed():.1f} s "
             f"({sum(render_secs) / len(render_secs):.2f} s per frame, {chosen})"
         )
     if bad:

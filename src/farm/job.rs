@@ -21,6 +21,27 @@ pub struct Job {
     /// Slurm's job id, once submitted.
     pub job_id: Option<String>,
     pub tasks: Vec<Task>,
+    /// A task run once every task of the array succeeded (a render's movie and plots); its
+    /// index is `tasks.len()`.
+    #[serde(default)]
+    pub finish: Option<Task>,
+    /// Slurm's job id of `finish`, once submitted.
+    #[serde(default)]
+    pub finish_id: Option<String>,
+}
+
+impl Job {
+    /// Task `k`: one of the array's, or the finishing task at `k = tasks.len()`.
+    pub fn task(&self, k: usize) -> Option<&Task> {
+        self.tasks
+            .get(k)
+            .or(self.finish.as_ref().filter(|_| k == self.tasks.len()))
+    }
+
+    /// Every task, the finishing one last.
+    pub fn all_tasks(&self) -> impl Iterator<Item = &Task> {
+        self.tasks.iter().chain(self.finish.as_ref())
+    }
 }
 
 /// One array task: a `polyphase` command line and what it is, for status tables.

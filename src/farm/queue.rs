@@ -21,6 +21,28 @@ pub fn task_states(job_id: &str) -> BTreeMap<usize, String> {
     states
 }
 
+/// Slurm's state of a job that is not an array, while Slurm knows it.
+pub fn job_state(job_id: &str) -> Option<String> {
+    let mut state = None;
+    let queries = [
+        (
+            "sacct",
+            vec!["-n", "-P", "-X", "-j", job_id, "-o", "JobID,State"],
+        ),
+        ("squeue", vec!["-h", "-j", job_id, "-o", "%i|%T"]),
+    ];
+    for (program, args) in queries {
+        let found = run(program, &args).and_then(|text| {
+            text.lines().find_map(|l| {
+                let (id, s) = l.split_once('|')?;
+                (id.trim() == job_id).then(|| s.split_whitespace().next().unwrap_or("").to_string())
+            })
+        });
+        state = found.or(state);
+    }
+    state
+}
+
 /// Stdout of a command that succeeded, else `None` (not installed, accounting disabled,
 /// or the job has left the queue).
 fn run(program: &str, args: &[&str]) -> Option<String> {

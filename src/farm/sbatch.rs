@@ -65,27 +65,51 @@ fn quote(s: &str) -> String {
     format!("'{}'", s.replace('\'', r"'\''"))
 }
 
-/// The job array script: task `$SLURM_ARRAY_TASK_ID` runs `polyphase task <slurm dir> K`,
-/// re-queued after a node failure (the task then resumes from its checkpoint).
+/// What one sbatch script runs: the tasks of an array, or one task after another job.
+pub enum Shape<'a> {
+    /// Tasks `0..n`, task `$SLURM_ARRAY_TASK_ID` each.
+    Array(usize),
+    /// Task `index` alone, once job `after` has ended with every task successful (cancelled
+    /// by Slurm when that can no longer happen).
+    After { index: usize, after: &'a str },
+}
+
+/// The script of a job: each task runs `polyphase task <slurm dir> K`, and is re-queued after
+/// a node failure (a re-queued run resumes from its checkpoint).
 pub fn script(
-    kind: &str,
-    tasks: usize,
+    name: &str,
+    shape: Shape,
     files: &JobFiles,
     program: &Path,
     workdir: &Path,
     opts: &SlurmOptions,
 ) -> String {
     let dir = files.dir.display().to_string();
+    let (head, index) = match shape {
+        Shape::Array(n) => (
+            format!(
+                "#SBATCH --array=0-{}\n#SBATCH --output={dir}/task-%a.log\n",
+                n - 1
+            ),
+            "\"$SLURM_ARRAY_TASK_ID\"".to_string(),
+        ),
+        Shape::After { index, after } => (
+            format!(
+                "#SBATCH --dependency=afterok:{after}\n#SBATCH --kill-on-invalid-dep=yes\n\
+                 #SBATCH --output={}\n",
+                files.log(index).display()
+            ),
+            index.to_string(),
+        ),
+    };
     let mut s = format!(
         "#!/bin/bash\n\
-         # Written by `polyphase submit {kind}`; `polyphase status` reads its progress.\n\
-         #SBATCH --job-name=polyphase-{kind}\n\
-         #SBATCH --array=0-{last}\n\
-         #SBATCH --output={dir}/task-%a.log\n\
+         # Written by `polyphase submit`; `polyphase status` reads its progress.\n\
+         #SBATCH --job-name=polyphase-{name}\n\
+         {head}\
          #SBATCH --cpus-per-task={cpus}\n\
          #SBATCH --requeue\n\
          #SBATCH --chdir={workdir}\n",
-        last = tasks - 1,
         cpus = opts.cpus,
         workdir = workdir.display(),
     );
@@ -97,7 +121,7 @@ pub fn script(
     }
     s += &format!(
         "export RAYON_NUM_THREADS=\"${{SLURM_CPUS_PER_TASK:-{cpus}}}\"\n\
-         exec {program} task {dir} \"$SLURM_ARRAY_TASK_ID\"\n",
+         exec {program} task {dir} {index}\n",
         cpus = opts.cpus,
         program = quote(&program.display().to_string()),
         dir = quote(&dir),
@@ -153,7 +177,7 @@ mod tests {
         };
         let s = script(
             "wedge",
-            3,
+            Shape::Array(3),
             &files,
             Path::new("/bin/polyphase"),
             Path::new("/w"),
@@ -165,5 +189,20 @@ mod tests {
         assert!(
             s.contains("exec '/bin/polyphase' task '/w/it'\\''s/slurm' \"$SLURM_ARRAY_TASK_ID\"")
         );
+        let s = script(
+            "render-finish",
+            Shape::After {
+                index: 3,
+                after: "41",
+            },
+            &files,
+            Path::new("/bin/polyphase"),
+            Path::new("/w"),
+            &opts,
+        );
+        assert!(s.contains("#SBATCH --dependency=afterok:41\n"));
+        assert!(!s.contains("--array"));
+        assert!(s.contains("#SBATCH --output=/w/it's/slurm/task-3.log\n"));
+        assert!(s.contains("task '/w/it'\\''s/slurm' 3\n"));
     }
 }
