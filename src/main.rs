@@ -10,6 +10,9 @@ mod render;
 mod run;
 mod run_coupled;
 mod run_passive;
+mod slab;
+mod slab_exr;
+mod slab_png;
 mod summary;
 mod validate;
 
