@@ -116,3 +116,14 @@ fn ascii(name: &str) -> String {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::ascii;
+
+    #[test]
+    fn phase_names_become_ascii_without_losing_characters() {
+        assert_eq!(ascii("oil_2"), "oil_2");
+        assert_eq!(ascii("eau salée"), "eau sal\\u{e9}e");
+    }
+}
