@@ -14,14 +14,17 @@ use crate::checkpoint::{self, Checkpoint};
 /// Temporary names [`write_atomic`] leaves behind when a run is killed mid-write.
 const TEMPORARIES: [&str; 3] = ["scene.tmp", "stats.tmp", "checkpoint.tmp"];
 
+/// What a frame writes into `frames/`: the mesh, and for slab scenes the EXR and PNG images.
+const FRAME_EXTENSIONS: [&str; 3] = ["ply", "exr", "png"];
+
 /// An output folder that has been checked to be writable.
 pub struct RunFolder {
     root: PathBuf,
 }
 
 impl RunFolder {
-    /// Creates `root/frames`, and removes the frames, stats and checkpoint of an earlier run
-    /// there.
+    /// Creates `root/frames`, and removes the frames (meshes and slab images), grids, stats and
+    /// checkpoint of an earlier run there.
     pub fn create(root: &Path) -> Result<RunFolder> {
         let frames = root.join("frames");
         fs::create_dir_all(&frames)
@@ -34,7 +37,11 @@ impl RunFolder {
             .with_context(|| format!("cannot list {}", frames.display()))?
             .flatten()
         {
-            if entry.path().extension().is_some_and(|e| e == "ply") {
+            if entry
+                .path()
+                .extension()
+                .is_some_and(|e| FRAME_EXTENSIONS.iter().any(|f| e == *f))
+            {
                 fs::remove_file(entry.path()).ok();
             }
         }
@@ -106,7 +113,7 @@ impl RunFolder {
         let mut text = lines[..kept].join("\n");
         text.push('\n');
         let mut later = Vec::new();
-        for (folder, extension) in [("frames", "ply"), ("grids", "vdb")] {
+        for (folder, extensions) in [("frames", &FRAME_EXTENSIONS[..]), ("grids", &["vdb"])] {
             let dir = self.root.join(folder);
             if folder == "grids" && !dir.exists() {
                 continue;
@@ -121,7 +128,7 @@ impl RunFolder {
                             .file_stem()
                             .and_then(|s| s.to_str()?.parse::<usize>().ok());
                         match p.extension().and_then(|e| e.to_str()) {
-                            Some(e) if e == extension => number.is_some_and(|n| n > frame),
+                            Some(e) if extensions.contains(&e) => number.is_some_and(|n| n > frame),
                             Some("tmp") => number.is_some(),
                             _ => false,
                         }
@@ -157,6 +164,12 @@ impl RunFolder {
         let mut bytes = Vec::new();
         ply::write_ply(mesh, &mut bytes)?;
         self.write(&format!("frames/{n:04}.ply"), &bytes)
+    }
+
+    /// Writes frame `n`'s slab images as `frames/NNNN.exr` and `frames/NNNN.png`.
+    pub fn write_slab_images(&self, n: usize, exr: &[u8], png: &[u8]) -> Result<()> {
+        self.write(&format!("frames/{n:04}.exr"), exr)?;
+        self.write(&format!("frames/{n:04}.png"), png)
     }
 
     /// Appends one line to `stats.jsonl` (rewritten atomically with the new line).

@@ -260,7 +260,7 @@ fn ensure_venv(render_dir: &Path, base_python: &Path) -> Result<PathBuf> {
         )?;
     }
     eprintln!(
-        "polyphase render: first use, installing Mitsuba 3, numpy and matplotlib into {} (about a minute)",
+        "polyphase render: first use, installing Mitsuba 3, numpy, matplotlib, ffmpeg (imageio-ffmpeg) and OpenEXR into {} (about a minute)",
         venv.display()
     );
     run_quiet(

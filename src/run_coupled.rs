@@ -18,6 +18,7 @@ use crate::checkpoint::{Checkpoint, Totals};
 use crate::measurements::{add_measurements, add_volume_correction};
 use crate::output::RunFolder;
 use crate::run::{progress, Progress, Start};
+use crate::slab::{self, mid_plane, SlabFrame};
 use crate::summary::Summary;
 
 /// Runs a validated coupled scene into `root` (already checked to be writable by `folder`),
@@ -95,7 +96,7 @@ fn simulate<T: InterfaceTracker>(
         Progress::Fresh(first) => {
             summary.add_step(&first);
             folder.write_frame(0, sim.tracker().mesh())?;
-            folder.write_grids(0, &grids(&sim)?)?;
+            write_grids_and_images(folder, 0, &sim, scene)?;
             let initial = FrameReport {
                 stages: first.stages.clone(),
                 cells: first.cells,
@@ -128,10 +129,14 @@ fn simulate<T: InterfaceTracker>(
             .with_context(|| format!("frame {frame} (t = {time:.4} s)"))?;
         let write_start = Instant::now();
         folder.write_frame(frame, sim.tracker().mesh())?;
-        folder.write_grids(frame, &grids(&sim)?)?;
-        report
-            .stages
-            .push(("write", write_start.elapsed().as_secs_f64()));
+        let slab_secs = write_grids_and_images(folder, frame, &sim, scene)?;
+        report.stages.push((
+            "write",
+            write_start.elapsed().as_secs_f64() - slab_secs.unwrap_or(0.0),
+        ));
+        if let Some(secs) = slab_secs {
+            report.stages.push(("slab_images", secs));
+        }
         summary.add_step(&StepStats {
             stages: report.stages.clone(),
             ..StepStats::default()
@@ -166,23 +171,38 @@ fn simulate<T: InterfaceTracker>(
     Ok(())
 }
 
-/// The frame's grids on the solver's cells, as one OpenVDB file: φ and χ as the solver reads
-/// them, each cell's velocity in its own phase's field ("v", see `Solver::cell_velocities`) and the
-/// pressure ("p").
-fn grids<T: InterfaceTracker>(sim: &CoupledSim<T>) -> Result<Vec<u8>> {
+/// Writes frame `n`'s grids on the solver's cells as `grids/NNNN.vdb`: φ and χ as the solver
+/// reads them, each cell's velocity in its own phase's field ("v", see
+/// `Solver::cell_velocities`) and the pressure ("p"). For a slab scene also its EXR and PNG
+/// images (`crate::slab`), the PNG from the tracker on the mid-plane of its finer grid; returns
+/// the seconds those took.
+fn write_grids_and_images<T: InterfaceTracker>(
+    folder: &RunFolder,
+    n: usize,
+    sim: &CoupledSim<T>,
+    scene: &Scene,
+) -> Result<Option<f64>> {
     let solver = sim.solver();
     let grid = *solver.grid();
     let field = sim.tracker().sample(&grid);
+    let velocity = solver.cell_velocities(&field, sim.phases())?;
     let mut out: Vec<VdbGrid> = phase_field_grids(&field).into();
-    let velocity = solver
-        .cell_velocities(&field, sim.phases())?
-        .iter()
-        .map(|v| v.as_vec3().to_array())
-        .collect();
-    out.push(VdbGrid::vector("v", velocity, [0.0; 3]));
+    out.push(VdbGrid::vector(
+        "v",
+        velocity.iter().map(|v| v.as_vec3().to_array()).collect(),
+        [0.0; 3],
+    ));
     let pressure = solver.pressure().iter().map(|&p| p as f32).collect();
     out.push(VdbGrid::scalar("p", pressure, 0.0));
-    Ok(encode(&grid, &out, Compression::Zip)?)
+    folder.write_grids(n, &encode(&grid, &out, Compression::Zip)?)?;
+    if !scene.file.domain.slab {
+        return Ok(None);
+    }
+    let start = Instant::now();
+    let frame = SlabFrame::coupled(&field, &velocity, solver.pressure());
+    let picture = sim.tracker().sample(&mid_plane(&scene.grid));
+    slab::write_images(folder, n, scene, sim.time(), &frame, &picture)?;
+    Ok(Some(start.elapsed().as_secs_f64()))
 }
 
 fn frame_line<T: InterfaceTracker>(

@@ -16,6 +16,7 @@ use crate::checkpoint::{Checkpoint, Totals};
 use crate::measurements::{add_measurements, add_volume_correction};
 use crate::output::RunFolder;
 use crate::run::{progress, Progress, Start};
+use crate::slab::{self, SlabFrame};
 use crate::summary::Summary;
 
 /// Runs (or resumes) a passive scene in `folder`.
@@ -104,6 +105,9 @@ fn track<T: InterfaceTracker>(
         Progress::Fresh(first) => {
             summary.add_step(&first);
             folder.write_frame(0, tracker.mesh())?;
+            if scene.file.domain.slab {
+                write_slab_images(folder, 0, scene, &tracker)?;
+            }
             folder.append_stats(&frame_line(0, 0.0, 0, &first, &tracker, scene)?)?;
             save(0, &tracker, &summary, 0.0)?;
             0
@@ -130,6 +134,13 @@ fn track<T: InterfaceTracker>(
         stats
             .stages
             .push(("write", write_start.elapsed().as_secs_f64()));
+        if scene.file.domain.slab {
+            let start = Instant::now();
+            write_slab_images(folder, frame, scene, &tracker)?;
+            stats
+                .stages
+                .push(("slab_images", start.elapsed().as_secs_f64()));
+        }
         let mut line = frame_line(frame, time, steps, &stats, &tracker, scene)?;
         if let (true, Some(initial_mesh)) = (frame == frames, initial_mesh) {
             add_period_errors(&mut line, &tracker, initial_mesh, &reference, &names, scene);
@@ -154,6 +165,19 @@ fn track<T: InterfaceTracker>(
     print!("{}", summary.table());
     folder.append_stats(&summary.json())?;
     Ok(())
+}
+
+/// Writes frame `n`'s EXR and PNG images of a slab scene (`crate::slab`): the tracker on the
+/// mid-plane of its own grid, with the scene's velocity at the frame's time.
+fn write_slab_images(
+    folder: &RunFolder,
+    n: usize,
+    scene: &Scene,
+    tracker: &impl InterfaceTracker,
+) -> Result<()> {
+    let time = n as f64 * scene.frame_dt();
+    let frame = SlabFrame::passive(tracker, &scene.grid, &scene.velocity, time);
+    slab::write_images(folder, n, scene, time, &frame, &frame.field)
 }
 
 fn accumulate(total: &mut StepStats, step: &StepStats) {

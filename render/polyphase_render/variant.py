@@ -63,12 +63,15 @@ def _probe_one(lib, timeout):
 def probe_llvm(timeout: float = 180.0):
     """(works, reason, library): renders a tiny scene with `llvm_ad_rgb` in a child process for
     each candidate libLLVM until one works; `library` is the DRJIT_LIBLLVM_PATH to use (None:
-    Dr.Jit's default). The verdict is cached per Mitsuba version and user setting."""
+    Dr.Jit's default). The verdict is cached per Mitsuba version, user setting and set of
+    libLLVM files, so installing one (the notice names the package) brings a new probe."""
     import mitsuba as mi
 
     if FAST not in mi.variants():
         return False, "this Mitsuba build has no llvm_ad_rgb", None
-    key = f"{getattr(mi, '__version__', '?')}|{os.environ.get('DRJIT_LIBLLVM_PATH', '')}"
+    candidates = llvm_candidates()
+    libraries = ",".join(c for c in candidates if c is not None)
+    key = f"{getattr(mi, '__version__', '?')}|{os.environ.get('DRJIT_LIBLLVM_PATH', '')}|{libraries}"
     try:
         with open(_cache_path(), "r", encoding="utf-8") as f:
             cached = json.load(f)
@@ -77,7 +80,7 @@ def probe_llvm(timeout: float = 180.0):
     except (OSError, ValueError, KeyError):
         pass
     works, reason, library = False, "no libLLVM >= 15 found", None
-    for lib in llvm_candidates():
+    for lib in candidates:
         ok, why = _probe_one(lib, timeout)
         if ok:
             works, reason, library = True, "", lib

@@ -1,5 +1,6 @@
-"""Movie assembly with ffmpeg (Debian package `ffmpeg`): H.264, yuv420p, sizes padded to even
-numbers as yuv420p requires. Without ffmpeg the movie is skipped with a notice."""
+"""Movie assembly with ffmpeg: H.264, yuv420p, sizes padded to even numbers as yuv420p requires.
+The system's ffmpeg (Debian package `ffmpeg`) comes first; without it, the binary that the
+`imageio-ffmpeg` wheel in requirements.txt ships, so a fresh machine writes the movie too."""
 
 import os
 import shutil
@@ -7,11 +8,25 @@ import subprocess
 import tempfile
 
 
+def find_ffmpeg():
+    """(path, source) of the ffmpeg to use: `ffmpeg` on PATH first, else the imageio-ffmpeg
+    wheel's own binary; (None, reason) when neither is there."""
+    system = shutil.which("ffmpeg")
+    if system is not None:
+        return system, "system"
+    try:
+        import imageio_ffmpeg
+
+        return imageio_ffmpeg.get_ffmpeg_exe(), "imageio-ffmpeg"
+    except (ImportError, RuntimeError) as e:
+        return None, f"no ffmpeg on PATH and none from imageio-ffmpeg ({e})"
+
+
 def make_movie(pngs: list, out_path, fps: int, notice) -> bool:
     """Encodes the PNGs in order into `out_path`; returns whether a movie was written."""
-    ffmpeg = shutil.which("ffmpeg")
+    ffmpeg, source = find_ffmpeg()
     if ffmpeg is None:
-        notice("note: ffmpeg not found, movie skipped (install it, e.g. `apt-get install ffmpeg`)")
+        notice(f"note: movie skipped: {source} (install it, e.g. `apt-get install ffmpeg`)")
         return False
     if len(pngs) < 2:
         notice("note: fewer than two frames rendered, movie skipped")
@@ -31,7 +46,7 @@ def make_movie(pngs: list, out_path, fps: int, notice) -> bool:
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             last = (r.stderr.strip().splitlines() or ["unknown error"])[-1]
-            notice(f"warning: ffmpeg failed, movie skipped: {last}")
+            notice(f"warning: ffmpeg ({source}) failed, movie skipped: {last}")
             if os.path.exists(tmp_out):
                 os.remove(tmp_out)
             return False
