@@ -148,7 +148,7 @@ pub fn run_selected(
                 &config.boundaries,
                 &open,
                 &rho,
-                &SampleViscosity::new(&material, &phases, &layout, grid.h, viscosity::PAIRS),
+                &SampleViscosity::new(&material, &phases, &layout, grid.h),
             );
             let (stats, mem) = viscosity::solve(&system, &mut v, &settings)?;
             rows.push(BenchRow {

@@ -33,13 +33,14 @@
 
 use crate::layout::{idx, par_fill, Layout};
 use crate::phase::{CellMaterial, PhaseProps};
+use crate::viscosity::PAIRS;
 use polyphase_grid::PhaseId;
 
 /// Most cells a sample looks at: a cell and its six face neighbours.
 const MOST: usize = 7;
 
-/// Viscosity per cell (arithmetic mean) and per edge of each family in `pairs` (harmonic
-/// mean), from the phases' fractions of each control volume; see the module doc.
+/// Viscosity per cell (arithmetic mean) and per edge of each family of `viscosity::PAIRS`
+/// (harmonic mean), from the phases' fractions of each control volume; see the module doc.
 pub(crate) struct SampleViscosity {
     /// μ per cell.
     pub cell: Vec<f64>,
@@ -48,15 +49,9 @@ pub(crate) struct SampleViscosity {
 }
 
 impl SampleViscosity {
-    /// Samples the viscosities of `m` on `layout` (cell size `h`) for the edge families
-    /// `pairs`, the phase table giving each phase's viscosity.
-    pub fn new(
-        m: &CellMaterial,
-        phases: &[PhaseProps],
-        layout: &Layout,
-        h: f64,
-        pairs: [(usize, usize); 3],
-    ) -> Self {
+    /// Samples the viscosities of `m` on `layout` (cell size `h`), the phase table giving
+    /// each phase's viscosity.
+    pub fn new(m: &CellMaterial, phases: &[PhaseProps], layout: &Layout, h: f64) -> Self {
         let mut cell = vec![0.0; layout.cells()];
         par_fill(layout.n, &mut cell, |p| {
             let c = idx(layout.n, p);
@@ -80,7 +75,7 @@ impl SampleViscosity {
                 .fold((0.0, 0.0), |(s, w), &(k, t)| (s + t, w + t * mu(phases, k)));
             weighted / sum
         });
-        let edge = pairs.map(|(a, b)| {
+        let edge = PAIRS.map(|(a, b)| {
             let ed = layout.edge_dims(a, b);
             let mut w = vec![0.0; ed[0] * ed[1] * ed[2]];
             par_fill(ed, &mut w, |p| {
@@ -204,7 +199,7 @@ mod tests {
             n: [1, 2, 1],
             periodic: [true, false, true],
         };
-        SampleViscosity::new(&m, &phases, &layout, 1.0, [(0, 1), (0, 2), (1, 2)])
+        SampleViscosity::new(&m, &phases, &layout, 1.0)
     }
 
     #[test]

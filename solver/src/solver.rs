@@ -421,13 +421,7 @@ impl Solver {
                 &self.config.boundaries,
                 open,
                 &rho,
-                &SampleViscosity::new(
-                    &material,
-                    phases,
-                    &vel.layout,
-                    self.config.grid.h,
-                    viscosity::PAIRS,
-                ),
+                &SampleViscosity::new(&material, phases, &vel.layout, self.config.grid.h),
             );
             Some(viscosity::solve(&system, &mut vel, &self.config.viscosity)?.0)
         } else {

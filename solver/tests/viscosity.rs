@@ -1,5 +1,5 @@
-//! Implicit viscosity against analytic solutions: shear-wave decay, two-layer Couette,
-//! Poiseuille.
+//! Implicit viscosity against analytic solutions: shear-wave decay, two-layer Couette (the
+//! interface on a node and between nodes), Poiseuille, two-layer Poiseuille between nodes.
 
 mod common;
 
