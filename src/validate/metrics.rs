@@ -362,6 +362,59 @@ mod tests {
         fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// The couette2 case's metric and scene, and a last frame whose `u_profile` holds
+    /// `values` at the 32 solver cell centres across the channel.
+    fn couette(values: impl Fn(f64) -> f64) -> (MetricSpec, Scene, Value) {
+        let text = include_str!("../../validation/couette2/scene.toml");
+        let scene = Scene::parse(text, "couette2/scene.toml").unwrap();
+        let case = include_str!("../../validation/couette2/case.toml");
+        let file: super::super::case::CaseFile = toml::from_str(case).unwrap();
+        let position: Vec<f64> = (0..32).map(|j| (j as f64 + 0.5) / 32.0).collect();
+        let value: Vec<f64> = position.iter().map(|&y| values(y)).collect();
+        let last = json!({"u_profile": {"position": position, "value": value}});
+        (file.metrics[0].clone(), scene, last)
+    }
+
+    #[test]
+    fn a_profile_is_compared_with_the_layered_flow_of_the_scene() {
+        // couette2: μ 10 below y = 0.4, 1 above, lid 0.01 m/s: τ = 0.01/(0.04 + 0.6), so the
+        // interface moves at 0.4 τ/10 and the profile is linear on each side.
+        let tau = 0.01 / (0.4 / 10.0 + 0.6 / 1.0);
+        let exact = move |y: f64| {
+            if y < 0.4 {
+                tau * y / 10.0
+            } else {
+                tau * (0.04 + (y - 0.4))
+            }
+        };
+        let (spec, scene, last) = couette(exact);
+        let (_, _, error) = profile_error(&spec, "u_profile", &last, &scene).unwrap();
+        assert!(error < 1e-12, "{error}");
+        // The samples above y = 0.9 are 2e-4 m/s (2 % of the lid speed) off: the error is that
+        // over the largest exact velocity, the top sample's.
+        let (spec, scene, last) = couette(|y| exact(y) + if y > 0.9 { 2e-4 } else { 0.0 });
+        let (_, _, error) = profile_error(&spec, "u_profile", &last, &scene).unwrap();
+        let top = exact(31.5 / 32.0);
+        assert!((error - 2e-4 / top).abs() < 1e-9, "{error}");
+    }
+
+    #[test]
+    fn a_profile_metric_names_what_it_misses() {
+        let (mut spec, scene, last) = couette(|_| 0.0);
+        let err = profile_error(&spec, "max_speed", &last, &scene)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("no [[measure]] of kind 'velocity_profile' named 'max_speed'"),
+            "{err}"
+        );
+        spec.interfaces = None;
+        let err = profile_error(&spec, "u_profile", &last, &scene)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("2 layers need 1 interfaces, got 0"), "{err}");
+    }
+
     #[test]
     fn interpolation_is_linear_and_stays_inside() {
         let (xs, ys) = ([0.0, 1.0, 3.0], [0.0, 2.0, 3.0]);
