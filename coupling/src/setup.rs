@@ -3,8 +3,7 @@
 use std::time::Instant;
 
 use glam::DVec3;
-use polyphase_scenes::scene::WALLS;
-use polyphase_scenes::{BoundaryKind, BoundarySpec, PreconditionerSpec, Scene, TrackerKind};
+use polyphase_scenes::{BoundaryKind, BoundarySpec, PreconditionerSpec, Scene, TrackerKind, WALLS};
 use polyphase_solver::{
     AxisBoundary, LinearSolverSettings, PhaseProps, PreconditionerKind, Solver, SolverConfig, Wall,
 };

@@ -280,6 +280,9 @@ pub struct BoundarySpec {
     pub wall_velocity: BTreeMap<String, [f64; 3]>,
 }
 
+/// Names of the six walls, `wall_velocity`'s keys, in the order axis × (low, high).
+pub const WALLS: [&str; 6] = ["x_low", "x_high", "y_low", "y_high", "z_low", "z_high"];
+
 impl BoundarySpec {
     /// The kinds of the x, y and z axes.
     pub fn axes(&self) -> [BoundaryKind; 3] {

@@ -19,7 +19,8 @@ pub mod volume;
 pub use builtin::{builtin, load, BUILTIN, DEFAULT_SCENE};
 pub use error::SceneError;
 pub use format::{
-    BoundaryKind, BoundarySpec, PreconditionerSpec, SceneFile, SolverSpec, TrackerKind, TrackerSpec,
+    BoundaryKind, BoundarySpec, PreconditionerSpec, SceneFile, SolverSpec, TrackerKind,
+    TrackerSpec, WALLS,
 };
 pub use measure::{Measure, MeasureKind};
 pub use scene::Scene;

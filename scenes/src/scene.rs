@@ -11,7 +11,7 @@ use polyphase_tracker::front::params::FrontParams;
 
 use crate::format::{
     BoundaryKind, BoundarySpec, HalfSpaceSpec, SceneFile, ShapeSpec, SolverSpec, TrackerKind,
-    TrackerSpec, VelocitySpec,
+    TrackerSpec, VelocitySpec, WALLS,
 };
 use crate::mesh_file::SceneBase;
 use crate::mesh_sdf::MeshSdf;
@@ -319,9 +319,6 @@ fn check_solver(file: &mut SceneFile, bad: &Bad) -> Result<Option<usize>, SceneE
     check_boundary(&spec.boundary, bad)?;
     Ok(Some((file.resolution / res) as usize))
 }
-
-/// Names of the six walls, `wall_velocity`'s keys, in the order axis × (low, high).
-pub const WALLS: [&str; 6] = ["x_low", "x_high", "y_low", "y_high", "z_low", "z_high"];
 
 /// Checks `[solver.boundary]`: each moving wall is a known no-slip wall moving tangentially.
 fn check_boundary(spec: &BoundarySpec, bad: &Bad) -> Result<(), SceneError> {

@@ -7,8 +7,7 @@ use std::path::Path;
 
 use anyhow::{bail, ensure, Context, Result};
 use polyphase_coupling::RtLinear;
-use polyphase_scenes::scene::WALLS;
-use polyphase_scenes::{BoundaryKind, MeasureKind, Scene};
+use polyphase_scenes::{BoundaryKind, MeasureKind, Scene, WALLS};
 use serde_json::Value;
 
 use super::case::MetricSpec;
