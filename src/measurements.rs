@@ -1,25 +1,27 @@
 //! What stats report of the interface beyond volumes and timings: the volume correction's
 //! share, and the scene's declared measurements (`[[measure]]`): a front is a
 //! number, tips are `{min, max}`, a centroid is `[x, y, z]`, pieces are a list of
-//! `{volume, centroid, radius, nearest, farthest}`; `null` where the phase is gone.
+//! `{volume, centroid, radius, nearest, farthest}`, a velocity profile is
+//! `{position: [..], value: [..]}`; `null` where the phase is gone.
 
 use anyhow::Result;
 use polyphase_coupling::{measure, Measured};
 use polyphase_scenes::{MeasureKind, Scene};
-use polyphase_tracker::{LabeledMesh, PhaseId};
+use polyphase_tracker::LabeledMesh;
 use serde_json::{json, Value};
 
-/// Adds each of the scene's measurements of `mesh` to the stats line under its name;
-/// `rise_velocity` of a phase comes from `rise` (the fluid's, in a coupled run).
+/// Adds each of the scene's measurements of `mesh` to the stats line under its name; the
+/// measurements of the fluid (`rise_velocity`, `velocity_profile`, coupled scenes only) come
+/// from `fluid`.
 pub fn add_measurements(
     line: &mut Value,
     scene: &Scene,
     mesh: &LabeledMesh,
-    rise: &dyn Fn(PhaseId) -> Result<Option<f64>>,
+    fluid: &dyn Fn(&MeasureKind) -> Result<Value>,
 ) -> Result<()> {
     for m in &scene.measures {
-        if let MeasureKind::RiseVelocity { phase } = m.kind {
-            line[m.name.as_str()] = json!(rise(phase)?);
+        if let MeasureKind::RiseVelocity { .. } | MeasureKind::VelocityProfile { .. } = m.kind {
+            line[m.name.as_str()] = fluid(&m.kind)?;
             continue;
         }
         line[m.name.as_str()] = match measure(mesh, &m.kind) {

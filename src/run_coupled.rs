@@ -10,7 +10,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use polyphase_coupling::{build_tracker, AnyTracker, CoupledSim, FrameReport};
 use polyphase_grid::vdb::{encode, phase_field_grids, Compression, VdbGrid};
-use polyphase_scenes::Scene;
+use polyphase_scenes::{MeasureKind, Scene};
 use polyphase_tracker::{InterfaceTracker, StepStats};
 use serde_json::{json, Value};
 
@@ -238,8 +238,16 @@ fn frame_line<T: InterfaceTracker>(
         "interface_cells": report.interface_cells,
         "interface_lag": report.interface_lag,
     });
-    add_measurements(&mut line, scene, mesh, &|phase| {
-        Ok(sim.rise_velocity(phase)?)
+    add_measurements(&mut line, scene, mesh, &|kind| {
+        Ok(match *kind {
+            MeasureKind::RiseVelocity { phase } => json!(sim.rise_velocity(phase)?),
+            MeasureKind::VelocityProfile { component, axis } => {
+                let profile = sim.velocity_profile(component, axis)?;
+                let (position, value): (Vec<f64>, Vec<f64>) = profile.into_iter().unzip();
+                json!({ "position": position, "value": value })
+            }
+            _ => Value::Null,
+        })
     })?;
     add_volume_correction(
         &mut line,

@@ -219,7 +219,7 @@ fn frame_line(
         "interface_cells": stats.interface_cells,
     });
     // Scene validation allows `rise_velocity` on coupled scenes only.
-    add_measurements(&mut line, scene, mesh, &|_| Ok(None))?;
+    add_measurements(&mut line, scene, mesh, &|_| Ok(Value::Null))?;
     add_volume_correction(
         &mut line,
         &names,

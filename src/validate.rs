@@ -5,6 +5,7 @@
 //! are read off its `stats.jsonl`, and any failed metric makes the exit status non-zero.
 
 mod case;
+mod layered_flow;
 mod metrics;
 
 use std::fmt::Write as _;

@@ -28,7 +28,14 @@ fn shipped_cases_pass_in_their_quick_versions() {
     );
     let rows: Value = serde_json::from_str(&fs::read_to_string(&json).unwrap()).unwrap();
     let rows = rows.as_array().unwrap();
-    for case in ["fall", "hydrostatic2", "hydrostatic3", "rt_linear"] {
+    for case in [
+        "couette2",
+        "fall",
+        "hydrostatic2",
+        "hydrostatic3",
+        "poiseuille2",
+        "rt_linear",
+    ] {
         assert!(
             rows.iter().any(|r| r["case"] == case && r["pass"] == true),
             "{case} missing or failed: {table}"

@@ -33,8 +33,9 @@ pub struct Piece {
     pub farthest: f64,
 }
 
-/// Evaluates one measurement on the tracker's mesh. `rise_velocity` needs the fluid too
-/// ([`crate::CoupledSim::rise_velocity`]): here it is `Value(None)`.
+/// Evaluates one measurement on the tracker's mesh. `rise_velocity` and `velocity_profile`
+/// need the fluid ([`crate::CoupledSim::rise_velocity`],
+/// [`crate::CoupledSim::velocity_profile`]): here they are `Value(None)`.
 pub fn measure(mesh: &LabeledMesh, kind: &MeasureKind) -> Measured {
     match *kind {
         MeasureKind::Front { phase, axis } => {
@@ -51,7 +52,9 @@ pub fn measure(mesh: &LabeledMesh, kind: &MeasureKind) -> Measured {
             Measured::Point((volume > 0.0).then(|| moment / volume))
         }
         MeasureKind::Pieces { phase } => Measured::Pieces(pieces(mesh, phase)),
-        MeasureKind::RiseVelocity { .. } => Measured::Value(None),
+        MeasureKind::RiseVelocity { .. } | MeasureKind::VelocityProfile { .. } => {
+            Measured::Value(None)
+        }
     }
 }
 

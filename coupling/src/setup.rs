@@ -3,9 +3,9 @@
 use std::time::Instant;
 
 use glam::DVec3;
-use polyphase_scenes::{PreconditionerSpec, Scene, TrackerKind};
+use polyphase_scenes::{BoundaryKind, BoundarySpec, PreconditionerSpec, Scene, TrackerKind, WALLS};
 use polyphase_solver::{
-    LinearSolverSettings, PhaseProps, PreconditionerKind, Solver, SolverConfig,
+    AxisBoundary, LinearSolverSettings, PhaseProps, PreconditionerKind, Solver, SolverConfig, Wall,
 };
 use polyphase_tracker::front::front_tracker::FrontTracker;
 use polyphase_tracker::{ContourTracker, InterfaceTracker, StepStats, TrackerSnapshot};
@@ -80,9 +80,9 @@ pub fn build_tracker(
     }
 }
 
-/// Solver (free-slip closed box at the scene's solver resolution, at rest) and the scene's
-/// tracker (built by [`build_tracker`]) for a coupled scene, plus the tracker's first-build
-/// stats.
+/// Solver (the scene's boundaries, a free-slip closed box by default, at the scene's solver
+/// resolution, at rest) and the scene's tracker (built by [`build_tracker`]) for a coupled
+/// scene, plus the tracker's first-build stats.
 pub fn from_scene(scene: &Scene) -> Result<(CoupledSim<AnyTracker>, StepStats), CouplingError> {
     let (tracker, first) = build_tracker(scene, None)?;
     let (solver, phases, control) = solver_parts(scene, tracker.max_travel())?;
@@ -100,6 +100,28 @@ pub fn with_tracker<T: InterfaceTracker>(
     CoupledSim::new(solver, tracker, phases, control)
 }
 
+/// The solver's boundary conditions of a scene's validated `[solver.boundary]`.
+fn boundaries(spec: &BoundarySpec) -> [AxisBoundary; 3] {
+    let velocity = |wall: usize| {
+        spec.wall_velocity
+            .get(WALLS[wall])
+            .map_or(DVec3::ZERO, |v| DVec3::from_array(*v))
+    };
+    let kinds = spec.axes();
+    [0, 1, 2].map(|a| match kinds[a] {
+        BoundaryKind::FreeSlip => AxisBoundary::FREE_SLIP,
+        BoundaryKind::Periodic => AxisBoundary::Periodic,
+        BoundaryKind::NoSlip => AxisBoundary::Walls {
+            low: Wall::NoSlip {
+                velocity: velocity(2 * a),
+            },
+            high: Wall::NoSlip {
+                velocity: velocity(2 * a + 1),
+            },
+        },
+    })
+}
+
 /// The solver, phase properties and time control a coupled scene asks for, the tracker
 /// advancing after the fluid moved `tracker_travel`.
 fn solver_parts(
@@ -114,6 +136,7 @@ fn solver_parts(
     };
     let mut config = SolverConfig::closed_box(grid);
     config.gravity = DVec3::from_array(spec.gravity);
+    config.boundaries = boundaries(&spec.boundary);
     let linear = LinearSolverSettings {
         preconditioner: match spec.preconditioner {
             PreconditionerSpec::Mic0 => PreconditionerKind::Mic0,

@@ -165,6 +165,34 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         Ok((n > 0).then(|| sum / n as f64))
     }
 
+    /// (centre coordinate, mean velocity `component`) of each layer of solver cells across
+    /// `axis`, lowest first, each cell's velocity in its own phase's field
+    /// ([`Solver::cell_velocities`]): the profile of a shear flow along the layers.
+    pub fn velocity_profile(
+        &self,
+        component: usize,
+        axis: usize,
+    ) -> Result<Vec<(f64, f64)>, CouplingError> {
+        let grid = *self.solver.grid();
+        let field = self.tracker.sample(&grid);
+        let velocities = self.solver.cell_velocities(&field, &self.phases)?;
+        let n = grid.dims;
+        let mut sums = vec![0.0; n[axis]];
+        for (c, v) in velocities.iter().enumerate() {
+            let layer = [c % n[0], (c / n[0]) % n[1], c / (n[0] * n[1])][axis];
+            sums[layer] += v[component];
+        }
+        let per_layer = (grid.cell_count() / n[axis]) as f64;
+        Ok(sums
+            .iter()
+            .enumerate()
+            .map(|(j, s)| {
+                let centre = grid.origin[axis] + (j as f64 + 0.5) * grid.h;
+                (centre, s / per_layer)
+            })
+            .collect())
+    }
+
     /// The interface tracker.
     pub fn tracker(&self) -> &T {
         &self.tracker

@@ -110,13 +110,19 @@ pub trait VelocityField: Sync {
     /// in time (the analytic test flows are smooth, so the fourth-order error is far below h).
     /// A field that is piecewise in time overrides this to trace each piece on its own.
     fn departure(&self, x: DVec3, t: f64, dt: f64) -> DVec3 {
-        let t1 = t + dt;
-        let k1 = self.velocity(x, t1);
-        let k2 = self.velocity(x - 0.5 * dt * k1, t1 - 0.5 * dt);
-        let k3 = self.velocity(x - 0.5 * dt * k2, t1 - 0.5 * dt);
-        let k4 = self.velocity(x - dt * k3, t);
-        x - dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        rk4_departure(self, x, t, dt)
     }
+}
+
+/// The departure point of [`VelocityField::departure`]'s default: classical RK4 backwards in
+/// time; for fields that override it and still trace with RK4.
+pub fn rk4_departure<V: VelocityField + ?Sized>(v: &V, x: DVec3, t: f64, dt: f64) -> DVec3 {
+    let t1 = t + dt;
+    let k1 = v.velocity(x, t1);
+    let k2 = v.velocity(x - 0.5 * dt * k1, t1 - 0.5 * dt);
+    let k3 = v.velocity(x - 0.5 * dt * k2, t1 - 0.5 * dt);
+    let k4 = v.velocity(x - dt * k3, t);
+    x - dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 }
 
 #[cfg(test)]

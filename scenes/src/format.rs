@@ -1,6 +1,7 @@
 //! The scene file as written by users (TOML, serde). Every optional field has a default, and
 //! the resolved scene (defaults filled in) serialises back to the same format.
 
+use std::collections::BTreeMap;
 use std::fmt;
 
 use polyphase_tracker::front::params::FrontParams;
@@ -52,7 +53,9 @@ pub struct SceneFile {
 /// (phases = [a, b], axis): the smallest and largest coordinate of the a–b interface;
 /// `centroid` (phase): the centre of the phase's volume; `pieces` (phase): every connected
 /// piece of the phase with its volume, centroid and roundness; `rise_velocity` (phase, coupled
-/// scenes): the mean velocity of the phase's solver cells against gravity.
+/// scenes): the mean velocity of the phase's solver cells against gravity; `velocity_profile`
+/// (component, axis, coupled scenes): the fluid's velocity component along each layer of
+/// solver cells across `axis` (a shear flow's profile).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeasureSpec {
@@ -67,6 +70,9 @@ pub struct MeasureSpec {
     /// `x`, `y` or `z`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub axis: Option<String>,
+    /// `velocity_profile` only: the velocity component, `x`, `y` or `z`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub component: Option<String>,
 }
 
 /// Render hints read by the Mitsuba pipeline; every field optional.
@@ -249,6 +255,67 @@ pub struct SolverSpec {
     /// Preconditioner of the pressure and viscosity solves.
     #[serde(default)]
     pub preconditioner: PreconditionerSpec,
+    /// Walls of the solver's box (`[solver.boundary]`); every wall free-slip by default.
+    #[serde(default, skip_serializing_if = "BoundarySpec::is_default")]
+    pub boundary: BoundarySpec,
+}
+
+/// The solver's boundary per axis and the velocities of moving walls: what sets up shear
+/// flows such as Couette (a moving no-slip wall) and Poiseuille (no-slip walls, a periodic
+/// channel driven by `gravity`). The tracker does not wrap: a periodic axis suits interfaces
+/// that meet its ends unchanged (layers along it), not shapes crossing them.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySpec {
+    #[serde(default)]
+    pub x: BoundaryKind,
+    #[serde(default)]
+    pub y: BoundaryKind,
+    #[serde(default)]
+    pub z: BoundaryKind,
+    /// Velocity (m/s) of a moving no-slip wall, by wall name (`x_low`, `x_high`, `y_low`,
+    /// `y_high`, `z_low`, `z_high`); tangential, as walls do not move along their normal.
+    /// Walls not named are at rest.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub wall_velocity: BTreeMap<String, [f64; 3]>,
+}
+
+/// Names of the six walls, `wall_velocity`'s keys, in the order axis × (low, high).
+pub const WALLS: [&str; 6] = ["x_low", "x_high", "y_low", "y_high", "z_low", "z_high"];
+
+impl BoundarySpec {
+    /// The kinds of the x, y and z axes.
+    pub fn axes(&self) -> [BoundaryKind; 3] {
+        [self.x, self.y, self.z]
+    }
+
+    fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
+/// Boundary condition of one axis of the solver's box.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoundaryKind {
+    /// Walls at both ends, no normal flow, no tangential stress.
+    #[default]
+    FreeSlip,
+    /// Walls at both ends that hold the fluid at their own velocity (`wall_velocity`).
+    NoSlip,
+    /// The box repeats along the axis.
+    Periodic,
+}
+
+impl BoundaryKind {
+    /// The name as scene files write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            BoundaryKind::FreeSlip => "free_slip",
+            BoundaryKind::NoSlip => "no_slip",
+            BoundaryKind::Periodic => "periodic",
+        }
+    }
 }
 
 impl Default for SolverSpec {
@@ -260,6 +327,7 @@ impl Default for SolverSpec {
             max_dt: None,
             tolerance: default_tolerance(),
             preconditioner: PreconditionerSpec::default(),
+            boundary: BoundarySpec::default(),
         }
     }
 }

@@ -18,7 +18,10 @@ pub mod volume;
 
 pub use builtin::{builtin, load, BUILTIN, DEFAULT_SCENE};
 pub use error::SceneError;
-pub use format::{PreconditionerSpec, SceneFile, SolverSpec, TrackerKind, TrackerSpec};
+pub use format::{
+    BoundaryKind, BoundarySpec, PreconditionerSpec, SceneFile, SolverSpec, TrackerKind,
+    TrackerSpec, WALLS,
+};
 pub use measure::{Measure, MeasureKind};
 pub use scene::Scene;
 pub use shapes::InitialPhases;

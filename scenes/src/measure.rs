@@ -23,6 +23,10 @@ pub enum MeasureKind {
     /// The mean upward velocity (against gravity) of the solver cells of `phase`: a bubble's
     /// or drop's rise velocity (Hysing et al. 2009). Coupled scenes only.
     RiseVelocity { phase: PhaseId },
+    /// The mean of the fluid's velocity `component` over each layer of solver cells across
+    /// `axis`, with the layers' centres: a shear flow's profile (two-layer Couette and
+    /// Poiseuille validation). Coupled scenes only.
+    VelocityProfile { component: usize, axis: usize },
 }
 
 /// A validated measurement with its stats key.
@@ -56,19 +60,33 @@ pub fn compile_measures(
             })?;
             Ok((phase_id(name, "phase")?, name))
         };
-        let axis = || -> Result<usize, SceneError> {
-            let a = spec.axis.as_deref().ok_or_else(|| {
+        let named_axis = |value: Option<&str>, field: &str| -> Result<usize, SceneError> {
+            let a = value.ok_or_else(|| {
                 bad(
                     &place,
-                    format!("kind '{}' needs the field 'axis'", spec.kind),
+                    format!("kind '{}' needs the field '{field}'", spec.kind),
                 )
             })?;
             AXES.iter().position(|x| *x == a).ok_or_else(|| {
                 bad(
-                    &format!("{place}.axis"),
+                    &format!("{place}.{field}"),
                     format!("must be x, y or z, got '{a}'"),
                 )
             })
+        };
+        let axis = || named_axis(spec.axis.as_deref(), "axis");
+        let coupled_only = |what: &str| -> Result<(), SceneError> {
+            if coupled {
+                Ok(())
+            } else {
+                Err(bad(
+                    &format!("{place}.kind"),
+                    format!(
+                        "'{what}' reads the fluid's velocity: it needs a coupled scene \
+                         (velocity.field = \"fluid\")"
+                    ),
+                ))
+            }
         };
         let (kind, default_name) = match spec.kind.as_str() {
             "front" => {
@@ -109,18 +127,20 @@ pub fn compile_measures(
                 (MeasureKind::Pieces { phase }, format!("pieces_{name}"))
             }
             "rise_velocity" => {
-                if !coupled {
-                    return Err(bad(
-                        &format!("{place}.kind"),
-                        "'rise_velocity' reads the fluid's velocity: it needs a coupled scene \
-                         (velocity.field = \"fluid\")"
-                            .into(),
-                    ));
-                }
+                coupled_only("rise_velocity")?;
                 let (phase, name) = one_phase()?;
                 (
                     MeasureKind::RiseVelocity { phase },
                     format!("rise_velocity_{name}"),
+                )
+            }
+            "velocity_profile" => {
+                coupled_only("velocity_profile")?;
+                let component = named_axis(spec.component.as_deref(), "component")?;
+                let axis = axis()?;
+                (
+                    MeasureKind::VelocityProfile { component, axis },
+                    format!("velocity_profile_{}_{}", AXES[component], AXES[axis]),
                 )
             }
             other => {
@@ -128,7 +148,7 @@ pub fn compile_measures(
                     &format!("{place}.kind"),
                     format!(
                         "unknown kind '{other}' (kinds: front, tips, centroid, pieces, \
-                         rise_velocity)"
+                         rise_velocity, velocity_profile)"
                     ),
                 ))
             }

@@ -10,7 +10,8 @@ use crate::measure::{compile_measures, Measure};
 use polyphase_tracker::front::params::FrontParams;
 
 use crate::format::{
-    HalfSpaceSpec, SceneFile, ShapeSpec, SolverSpec, TrackerKind, TrackerSpec, VelocitySpec,
+    BoundaryKind, BoundarySpec, HalfSpaceSpec, SceneFile, ShapeSpec, SolverSpec, TrackerKind,
+    TrackerSpec, VelocitySpec, WALLS,
 };
 use crate::mesh_file::SceneBase;
 use crate::mesh_sdf::MeshSdf;
@@ -315,7 +316,43 @@ fn check_solver(file: &mut SceneFile, bad: &Bad) -> Result<Option<usize>, SceneE
     if let Some(m) = spec.max_dt {
         positive(m, "solver.max_dt", bad)?;
     }
+    check_boundary(&spec.boundary, bad)?;
     Ok(Some((file.resolution / res) as usize))
+}
+
+/// Checks `[solver.boundary]`: each moving wall is a known no-slip wall moving tangentially.
+fn check_boundary(spec: &BoundarySpec, bad: &Bad) -> Result<(), SceneError> {
+    let axes = spec.axes();
+    for (name, v) in &spec.wall_velocity {
+        let place = format!("solver.boundary.wall_velocity.{name}");
+        let axis = WALLS.iter().position(|w| w == name).ok_or_else(|| {
+            bad(
+                &place,
+                format!("unknown wall (walls: {})", WALLS.join(", ")),
+            )
+        })? / 2;
+        let axis_name = ["x", "y", "z"][axis];
+        if axes[axis] != BoundaryKind::NoSlip {
+            return Err(bad(
+                &place,
+                format!(
+                    "only a no-slip wall moves, but solver.boundary.{axis_name} is '{}'",
+                    axes[axis].name()
+                ),
+            ));
+        }
+        check_vec(v, &place, bad)?;
+        if v[axis] != 0.0 {
+            return Err(bad(
+                &format!("{place}[{axis}]"),
+                format!(
+                    "a wall moves along itself only: the {axis_name} component must be 0, got {}",
+                    v[axis]
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn one_line(s: &str) -> String {

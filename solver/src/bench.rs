@@ -8,6 +8,7 @@ use crate::error::SolverError;
 use crate::layout::{unidx, Layout};
 use crate::mac::MacGrid;
 use crate::phase::{cell_material, face_densities, PhaseProps};
+use crate::sample_viscosity::SampleViscosity;
 use crate::solid::open_fractions;
 use crate::{pressure, viscosity};
 use glam::DVec3;
@@ -147,7 +148,7 @@ pub fn run_selected(
                 &config.boundaries,
                 &open,
                 &rho,
-                &material.mu,
+                &SampleViscosity::new(&material, &phases, &layout, grid.h),
             );
             let (stats, mem) = viscosity::solve(&system, &mut v, &settings)?;
             rows.push(BenchRow {

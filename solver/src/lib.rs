@@ -18,6 +18,7 @@ mod linalg;
 mod mac;
 mod phase;
 mod pressure;
+mod sample_viscosity;
 mod solid;
 mod solver;
 mod viscosity;

@@ -13,6 +13,7 @@ use crate::linalg::pcg::SolveStats;
 use crate::linalg::vecops::first_non_finite;
 use crate::mac::MacGrid;
 use crate::phase::{cell_material, face_densities, PhaseProps};
+use crate::sample_viscosity::SampleViscosity;
 use crate::solid::open_fractions;
 use crate::{pressure, viscosity};
 use glam::DVec3;
@@ -420,7 +421,7 @@ impl Solver {
                 &self.config.boundaries,
                 open,
                 &rho,
-                &material.mu,
+                &SampleViscosity::new(&material, phases, &vel.layout, self.config.grid.h),
             );
             Some(viscosity::solve(&system, &mut vel, &self.config.viscosity)?.0)
         } else {

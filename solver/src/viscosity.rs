@@ -4,12 +4,13 @@
 //! Discretisation: D maps face velocities to strain rates — ε_aa = ∂u_a/∂x_a at cell centres
 //! (weight 2μ_cell, so τ_aa = 2μ ε_aa) and γ_ab = ∂u_a/∂x_b + ∂u_b/∂x_a at the edges between
 //! faces (weight μ_edge·vol). Then ∇·τ = −Dᵀ W D u and the system (M + dt·Dᵀ W D) u = M u* is
-//! symmetric positive definite (M = diag ρ_face). μ_edge is the harmonic mean of the (up to
-//! four) cells around the edge: exact for layers in series, which is what makes two-layer
-//! Couette flow piecewise linear to round-off. Walls: free-slip edges carry no stress (weight
-//! 0); no-slip edges use the ghost value 2V − u (one-sided difference 2(u − V)/h) with the half
-//! control volume (vol = ½); edges on two walls are dropped. Normal faces on walls and closed
-//! solid faces are fixed at zero (identity rows).
+//! symmetric positive definite (M = diag ρ_face). μ_cell and μ_edge come from the phases'
+//! fractions of each sample's control volume (`sample_viscosity.rs`: arithmetic at cells,
+//! harmonic at edges), so a viscosity jump sits at the interface, between grid nodes. Walls:
+//! free-slip edges carry no stress (weight 0); no-slip edges use the ghost value 2V − u
+//! (one-sided difference 2(u − V)/h) with the half control volume (vol = ½); edges on two
+//! walls are dropped. Normal faces on walls and closed solid faces are fixed at zero (identity
+//! rows).
 //!
 //! Preconditioning: block diagonal, one 7-point block per component (the cross-component
 //! couplings through γ are left out), each by MIC(0) or multigrid.
@@ -22,11 +23,12 @@ use crate::linalg::multigrid::Multigrid;
 use crate::linalg::pcg::{pcg, LinearOperator, Preconditioner, SolveStats};
 use crate::linalg::stencil::Stencil7;
 use crate::mac::MacGrid;
+use crate::sample_viscosity::SampleViscosity;
 use rayon::prelude::*;
 use std::sync::{Mutex, PoisonError};
 
 /// The three edge families, by the two axes whose nodes they sit on.
-const PAIRS: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
+pub(crate) const PAIRS: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
 
 /// Linear-index strides of a box of `dims`.
 #[inline]
@@ -81,46 +83,25 @@ impl<'a> ViscousSystem<'a> {
         boundaries: &[AxisBoundary; 3],
         open: &'a [Vec<f64>; 3],
         rho_face: &'a [Vec<f64>; 3],
-        mu: &[f64],
+        mu: &SampleViscosity,
     ) -> Self {
         let walls = boundaries.map(|b| match b {
             AxisBoundary::Periodic => None,
             AxisBoundary::Walls { low, high } => Some((low, high)),
         });
-        let w_cell = mu.par_iter().map(|m| 2.0 * m).collect();
-        let w_edge = PAIRS.map(|(a, b)| {
+        let w_cell = mu.cell.par_iter().map(|m| 2.0 * m).collect();
+        let w_edge = [0, 1, 2].map(|k| {
+            let (a, b) = PAIRS[k];
             let ed = layout.edge_dims(a, b);
             let mut w = vec![0.0; ed[0] * ed[1] * ed[2]];
             par_fill(ed, &mut w, |p| {
-                let on_a = layout.on_wall(a, p[a]);
-                let on_b = layout.on_wall(b, p[b]);
-                let vol = match (on_a, on_b) {
+                let vol = match (layout.on_wall(a, p[a]), layout.on_wall(b, p[b])) {
                     (true, true) => 0.0,
                     (false, false) => 1.0,
                     (true, false) => wall_volume(walls[a], p[a] == 0),
                     (false, true) => wall_volume(walls[b], p[b] == 0),
                 };
-                if vol == 0.0 {
-                    return 0.0;
-                }
-                let mut inv = 0.0;
-                let mut count = 0usize;
-                for ca in [layout.cell_below(a, p[a]), layout.cell_above_node(a, p[a])] {
-                    for cb in [layout.cell_below(b, p[b]), layout.cell_above_node(b, p[b])] {
-                        if let (Some(ca), Some(cb)) = (ca, cb) {
-                            let mut q = p;
-                            q[a] = ca;
-                            q[b] = cb;
-                            let m = mu[idx(layout.n, q)];
-                            if m <= 0.0 {
-                                return 0.0;
-                            }
-                            inv += 1.0 / m;
-                            count += 1;
-                        }
-                    }
-                }
-                vol * count as f64 / inv
+                vol * mu.edge[k][idx(ed, p)]
             });
             w
         });
@@ -626,9 +607,17 @@ mod tests {
                 .map(|(f, _)| 1.0 + (f % 5) as f64)
                 .collect::<Vec<_>>()
         });
-        let mu: Vec<f64> = (0..layout.cells())
-            .map(|c| 0.1 + (c % 7) as f64 * 3.0)
-            .collect();
+        let mu = SampleViscosity {
+            cell: (0..layout.cells())
+                .map(|c| 0.1 + (c % 7) as f64 * 3.0)
+                .collect(),
+            edge: PAIRS.map(|(a, b)| {
+                let ed = layout.edge_dims(a, b);
+                (0..ed[0] * ed[1] * ed[2])
+                    .map(|e| 0.2 + (e % 5) as f64 * 2.0)
+                    .collect()
+            }),
+        };
         let sys = ViscousSystem::new(layout, 0.25, 0.3, &boundaries, &open, &rho, &mu);
         check(&sys);
     }

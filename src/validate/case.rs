@@ -31,7 +31,7 @@ pub struct CaseFile {
 pub struct MetricSpec {
     /// Name in the table.
     pub name: String,
-    /// `rt_linear_growth`, `free_fall`, `roundness`, `max_value` or `series`.
+    /// `rt_linear_growth`, `free_fall`, `roundness`, `max_value`, `series` or `profile`.
     pub kind: String,
     /// The stats key it reads (a dotted path into a frame's JSON line, e.g. `tips.max`).
     #[serde(default)]
@@ -42,6 +42,13 @@ pub struct MetricSpec {
     /// `rt_linear_growth`: the perturbation's wavelength (m).
     #[serde(default)]
     pub wavelength: Option<f64>,
+    /// `profile`: the phases of the layers from the low wall up, by name.
+    #[serde(default)]
+    pub layers: Option<Vec<String>>,
+    /// `profile`: the coordinates (m, along the profile's axis) of the interfaces between
+    /// consecutive `layers`, increasing.
+    #[serde(default)]
+    pub interfaces: Option<Vec<f64>>,
     /// `series`: a CSV of `time,value` rows (header allowed), relative to the case folder.
     #[serde(default)]
     pub reference: Option<String>,

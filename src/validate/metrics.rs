@@ -7,10 +7,11 @@ use std::path::Path;
 
 use anyhow::{bail, ensure, Context, Result};
 use polyphase_coupling::RtLinear;
-use polyphase_scenes::Scene;
+use polyphase_scenes::{BoundaryKind, MeasureKind, Scene, WALLS};
 use serde_json::Value;
 
 use super::case::MetricSpec;
+use super::layered_flow::{Layer, LayeredFlow};
 
 /// One metric's result.
 #[derive(Clone, Debug)]
@@ -112,9 +113,14 @@ pub fn evaluate(
                 worst.with_context(|| format!("{file}: no reference time inside the run"))?;
             (o, r, e, e.abs() <= tolerance)
         }
+        "profile" => {
+            let k = key()?;
+            let (ours, reference, error) = profile_error(spec, k, last, scene)?;
+            (ours, reference, error, error <= tolerance)
+        }
         other => bail!(
             "metric '{}': unknown kind '{other}' (kinds: rt_linear_growth, free_fall, roundness, \
-             max_value, series)",
+             max_value, series, profile)",
             spec.name
         ),
     };
@@ -160,6 +166,108 @@ fn rt_theory(spec: &MetricSpec, scene: &Scene) -> Result<f64> {
         let atwood = (rt.heavy.0 - rt.light.0) / (rt.heavy.0 + rt.light.0);
         Ok(((atwood * rt.g * rt.k).sqrt() * t).cosh())
     }
+}
+
+/// The last frame's velocity profile `key` against the exact steady flow of the metric's
+/// `layers` (see `layered_flow.rs`), the walls, gravity and phases taken from the scene:
+/// (ours, exact) at the worst sample and the largest |ours − exact| over the largest |exact|.
+fn profile_error(
+    spec: &MetricSpec,
+    key: &str,
+    last: &Value,
+    scene: &Scene,
+) -> Result<(f64, f64, f64)> {
+    let what = |field: &str| format!("metric '{}' (profile) needs `{field}`", spec.name);
+    let names = spec.layers.as_deref().with_context(|| what("layers"))?;
+    let interfaces = spec.interfaces.as_deref().unwrap_or_default();
+    ensure!(
+        interfaces.len() + 1 == names.len(),
+        "metric '{}': {} layers need {} interfaces, got {}",
+        spec.name,
+        names.len(),
+        names.len() - 1,
+        interfaces.len()
+    );
+    let Some(&MeasureKind::VelocityProfile { component, axis }) = scene
+        .measures
+        .iter()
+        .find(|m| m.name == key)
+        .map(|m| &m.kind)
+    else {
+        bail!(
+            "metric '{}': the scene has no [[measure]] of kind 'velocity_profile' named '{key}'",
+            spec.name
+        );
+    };
+    let solver = scene
+        .file
+        .solver
+        .as_ref()
+        .context("the metric needs a coupled scene")?;
+    let grid = scene
+        .solver_grid
+        .context("the metric needs a coupled scene")?;
+    ensure!(
+        solver.boundary.axes()[axis] == BoundaryKind::NoSlip,
+        "metric '{}': the profile's axis needs no-slip walls (solver.boundary)",
+        spec.name
+    );
+    let wall = |w: usize| {
+        solver
+            .boundary
+            .wall_velocity
+            .get(WALLS[w])
+            .map_or(0.0, |v| v[component])
+    };
+    let low = grid.origin[axis];
+    let width = grid.dims[axis] as f64 * grid.h;
+    let g = gravity(scene)?[component];
+    let mut layers = Vec::with_capacity(names.len());
+    for (k, name) in names.iter().enumerate() {
+        let phase = scene
+            .file
+            .phases
+            .iter()
+            .find(|p| p.name == *name)
+            .with_context(|| format!("metric '{}': unknown phase '{name}'", spec.name))?;
+        layers.push(Layer {
+            top: interfaces.get(k).map_or(width, |s| s - low),
+            viscosity: phase.viscosity,
+            force: phase.density * g,
+        });
+    }
+    let flow = LayeredFlow::new(layers, (wall(2 * axis), wall(2 * axis + 1)))
+        .with_context(|| format!("metric '{}'", spec.name))?;
+    let samples = |field: &str| -> Result<Vec<f64>> {
+        last[key][field]
+            .as_array()
+            .and_then(|a| a.iter().map(Value::as_f64).collect())
+            .with_context(|| format!("stats have no number list at '{key}.{field}'"))
+    };
+    let (position, value) = (samples("position")?, samples("value")?);
+    ensure!(
+        !position.is_empty() && position.len() == value.len(),
+        "stats '{key}': positions and values differ in number or are empty"
+    );
+    let exact: Vec<f64> = position.iter().map(|x| flow.velocity(x - low)).collect();
+    let scale = exact.iter().fold(0.0f64, |m, u| m.max(u.abs()));
+    ensure!(
+        scale > 0.0,
+        "metric '{}': the exact profile is zero everywhere",
+        spec.name
+    );
+    let worst = (0..value.len())
+        .max_by(|&i, &j| {
+            (value[i] - exact[i])
+                .abs()
+                .total_cmp(&(value[j] - exact[j]).abs())
+        })
+        .unwrap_or(0);
+    Ok((
+        value[worst],
+        exact[worst],
+        (value[worst] - exact[worst]).abs() / scale,
+    ))
 }
 
 fn gravity(scene: &Scene) -> Result<glam::DVec3> {
@@ -251,6 +359,59 @@ mod tests {
         let err = read_series(&bad).unwrap_err().to_string();
         assert!(err.ends_with("bad.csv:3: expected `time,value`"), "{err}");
         fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The couette2 case's metric and scene, and a last frame whose `u_profile` holds
+    /// `values` at the 32 solver cell centres across the channel.
+    fn couette(values: impl Fn(f64) -> f64) -> (MetricSpec, Scene, Value) {
+        let text = include_str!("../../validation/couette2/scene.toml");
+        let scene = Scene::parse(text, "couette2/scene.toml").unwrap();
+        let case = include_str!("../../validation/couette2/case.toml");
+        let file: super::super::case::CaseFile = toml::from_str(case).unwrap();
+        let position: Vec<f64> = (0..32).map(|j| (j as f64 + 0.5) / 32.0).collect();
+        let value: Vec<f64> = position.iter().map(|&y| values(y)).collect();
+        let last = json!({"u_profile": {"position": position, "value": value}});
+        (file.metrics[0].clone(), scene, last)
+    }
+
+    #[test]
+    fn a_profile_is_compared_with_the_layered_flow_of_the_scene() {
+        // couette2: μ 10 below y = 0.4, 1 above, lid 0.01 m/s: τ = 0.01/(0.04 + 0.6), so the
+        // interface moves at 0.4 τ/10 and the profile is linear on each side.
+        let tau = 0.01 / (0.4 / 10.0 + 0.6 / 1.0);
+        let exact = move |y: f64| {
+            if y < 0.4 {
+                tau * y / 10.0
+            } else {
+                tau * (0.04 + (y - 0.4))
+            }
+        };
+        let (spec, scene, last) = couette(exact);
+        let (_, _, error) = profile_error(&spec, "u_profile", &last, &scene).unwrap();
+        assert!(error < 1e-12, "{error}");
+        // The samples above y = 0.9 are 2e-4 m/s (2 % of the lid speed) off: the error is that
+        // over the largest exact velocity, the top sample's.
+        let (spec, scene, last) = couette(|y| exact(y) + if y > 0.9 { 2e-4 } else { 0.0 });
+        let (_, _, error) = profile_error(&spec, "u_profile", &last, &scene).unwrap();
+        let top = exact(31.5 / 32.0);
+        assert!((error - 2e-4 / top).abs() < 1e-9, "{error}");
+    }
+
+    #[test]
+    fn a_profile_metric_names_what_it_misses() {
+        let (mut spec, scene, last) = couette(|_| 0.0);
+        let err = profile_error(&spec, "max_speed", &last, &scene)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("no [[measure]] of kind 'velocity_profile' named 'max_speed'"),
+            "{err}"
+        );
+        spec.interfaces = None;
+        let err = profile_error(&spec, "u_profile", &last, &scene)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("2 layers need 1 interfaces, got 0"), "{err}");
     }
 
     #[test]
