@@ -32,6 +32,7 @@ pub fn build_tracker(
             let (mut tracker, first) =
                 ContourTracker::new(scene.grid, &initial, n_phases, background);
             tracker.set_volume_targets(scene.volume_targets());
+            tracker.set_max_travel(scene.file.time.cfl * scene.grid.h);
             Ok((Box::new(tracker), first))
         }
         (
@@ -163,4 +164,31 @@ fn solver_parts(
         tracker_travel,
     };
     Ok((solver, phases, control))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A built-in scene with `cfl = N` added to its `[time]` table.
+    fn with_time_cfl(name: &str, cfl: f64) -> Scene {
+        let (_, text) = polyphase_scenes::BUILTIN
+            .iter()
+            .find(|(n, _)| *n == name)
+            .expect("built-in");
+        let text = text.replacen("[time]\n", &format!("[time]\ncfl = {cfl}\n"), 1);
+        Scene::parse(&text, name).expect("valid")
+    }
+
+    #[test]
+    fn fresh_and_restored_trackers_travel_the_scenes_time_cfl() {
+        for name in ["rayleigh_taylor", "circle3_rotate"] {
+            let scene = with_time_cfl(name, 2.5);
+            let h = scene.grid.h;
+            let (fresh, _) = build_tracker(&scene, None).expect("built");
+            assert_eq!(fresh.max_travel(), 2.5 * h, "{name}, fresh");
+            let restored = build_tracker(&scene, fresh.snapshot()).expect("restored").0;
+            assert_eq!(restored.max_travel(), 2.5 * h, "{name}, from a checkpoint");
+        }
+    }
 }
