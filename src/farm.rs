@@ -88,6 +88,7 @@ pub fn submit(args: &SubmitArgs) -> Result<()> {
             ("render", render.dir.clone(), tasks)
         }
     };
+    sbatch::check_reachable()?;
     let root = absolute(&root)?;
     let files = JobFiles::of(&root);
     if let Ok(old) = files.read_job() {

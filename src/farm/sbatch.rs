@@ -129,6 +129,30 @@ pub fn script(
     s
 }
 
+/// Fails with Slurm's own last line unless its controller answers (`squeue`), so a job is
+/// never half prepared for a cluster that cannot take it.
+pub fn check_reachable() -> Result<()> {
+    let out = Command::new("squeue")
+        .args(["-h", "-o", "%i"])
+        .output()
+        .context("cannot run squeue (is Slurm installed and this a submit host?)")?;
+    if !out.status.success() {
+        bail!("Slurm does not answer: {}", last_line(&out.stderr));
+    }
+    Ok(())
+}
+
+/// The last non-empty line of a command's output.
+fn last_line(bytes: &[u8]) -> String {
+    let text = String::from_utf8_lossy(bytes);
+    text.lines()
+        .rev()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("")
+        .trim()
+        .to_string()
+}
+
 /// Submits the script with `sbatch --parsable`; returns the job id.
 pub fn submit(script: &Path) -> Result<String> {
     let out = Command::new("sbatch")
@@ -140,7 +164,7 @@ pub fn submit(script: &Path) -> Result<String> {
         bail!(
             "sbatch refused {}: {}",
             script.display(),
-            String::from_utf8_lossy(&out.stderr).trim()
+            last_line(&out.stderr)
         );
     }
     let text = String::from_utf8_lossy(&out.stdout);
