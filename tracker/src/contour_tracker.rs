@@ -279,7 +279,7 @@ impl InterfaceTracker for ContourTracker {
             .map(|_| first_aim(&self.component_targets, &self.carried_loss));
         let (lo, hi) = (self.grid.origin, self.grid.upper());
         let back_to_departure = |x: DVec3| departure_point(velocity, x, t, dt).clamp(lo, hi);
-        let mut retried: Vec<(&'static str, f64)> = Vec::new();
+        let mut more_stages: Vec<(&'static str, f64)> = Vec::new();
         let mut retries = 0;
         let ((tree, mesh, query, mut stats), next) = loop {
             // A quarter cell per step at most: a sheet lost in one step comes back over a few.
@@ -302,7 +302,9 @@ impl InterfaceTracker for ContourTracker {
             else {
                 break (built, None);
             };
+            let started = Instant::now();
             let found = (self.find_components)(&built.1, self.n_phases, self.background);
+            let traced = Instant::now();
             let succession = Succession::trace(
                 &self.mesh,
                 &self.query,
@@ -311,6 +313,8 @@ impl InterfaceTracker for ContourTracker {
                 &found,
                 &back_to_departure,
             );
+            more_stages.push(("components", (traced - started).as_secs_f64()));
+            more_stages.push(("succession", traced.elapsed().as_secs_f64()));
             let targets = &self.component_targets;
             let after = succession.pull_back(&found.volume, targets);
             let floor = self.grid.h.powi(3);
@@ -329,11 +333,12 @@ impl InterfaceTracker for ContourTracker {
                 break (built, Some(next));
             }
             reaim(aim, shift.aimed(), &after, targets);
-            retried.extend(built.3.stages);
+            more_stages.extend(built.3.stages);
             retries += 1;
         };
-        // The discarded tries' time counts in their stages.
-        for (name, secs) in retried {
+        // The discarded tries' time counts in their stages, as does the correction's
+        // bookkeeping (finding and tracing the components).
+        for (name, secs) in more_stages {
             match stats.stages.iter_mut().find(|(n, _)| *n == name) {
                 Some((_, total)) => *total += secs,
                 None => stats.stages.push((name, secs)),

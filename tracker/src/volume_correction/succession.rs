@@ -11,7 +11,8 @@
 //! old ones a merge, several new ones a split. Within a group, the old components' sum of a
 //! quantity (target, carried loss) is shared among the new ones in proportion to their volumes,
 //! and the new ones' volume among the old ones in proportion to their targets. An old component
-//! in no group vanished; a new one in no group appeared.
+//! in no group vanished; a new one in no group appeared. A phase with one component before
+//! and after the step (a pool, a single ball) is linked without tracing.
 
 use std::collections::BTreeMap;
 
@@ -79,11 +80,28 @@ impl Succession {
         new: &Components,
         departure: &(dyn Fn(DVec3) -> DVec3 + Sync),
     ) -> Succession {
+        // A phase with at most one component before and after needs no tracing.
+        let phases = old
+            .phase
+            .iter()
+            .chain(&new.phase)
+            .max()
+            .map_or(0, |&p| p as usize + 1);
+        let (before, after) = (old.count_per_phase(phases), new.count_per_phase(phases));
+        let traced: Vec<bool> = (0..phases).map(|p| before[p] > 1 || after[p] > 1).collect();
+        let mut links: Vec<(u32, u32)> = (0..new.len())
+            .filter(|&j| !traced[new.phase[j] as usize])
+            .filter_map(|j| {
+                let i = old.phase.iter().position(|&p| p == new.phase[j])?;
+                Some((i as u32, j as u32))
+            })
+            .collect();
         let votes: Vec<[Option<(u32, u32)>; 2]> = (0..mesh.triangle_count())
             .into_par_iter()
             .map(|f| {
                 let sides = new.sides[f];
-                if mesh.labels[f].contains(&OUTSIDE) || sides == [NONE; 2] {
+                let wanted = |s: usize| sides[s] != NONE && traced[mesh.labels[f][s] as usize];
+                if mesh.labels[f].contains(&OUTSIDE) || !(wanted(0) || wanted(1)) {
                     return [None; 2];
                 }
                 let [a, b, c] = mesh.corners(f);
@@ -91,6 +109,9 @@ impl Succession {
                     return [None; 2];
                 };
                 [0, 1].map(|s| {
+                    if !wanted(s) {
+                        return None;
+                    }
                     let j = sides[s];
                     let phase = mesh.labels[f][s];
                     let s0 = previous.labels[t0].iter().position(|&p| p == phase)?;
@@ -112,14 +133,15 @@ impl Succession {
                 *best = Some((w, i));
             }
         }
-        let links: Vec<(u32, u32)> = weight
-            .iter()
-            .filter(|(&(i, j), &w)| {
-                let least = old.area[i as usize].min(new.area[j as usize]);
-                w >= LINK_FRACTION * least || strongest[j as usize].map(|(_, s)| s) == Some(i)
-            })
-            .map(|(&link, _)| link)
-            .collect();
+        links.extend(
+            weight
+                .iter()
+                .filter(|(&(i, j), &w)| {
+                    let least = old.area[i as usize].min(new.area[j as usize]);
+                    w >= LINK_FRACTION * least || strongest[j as usize].map(|(_, s)| s) == Some(i)
+                })
+                .map(|(&link, _)| link),
+        );
         Succession::from_links(old.len(), new.len(), &links)
     }
 
