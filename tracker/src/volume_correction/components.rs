@@ -226,15 +226,20 @@ impl Pieces {
                 };
                 let [a, b, c] = mesh.corners(first / 2);
                 let x = (a + b + c) / 3.0;
-                (0..n)
+                // Smallest first, so the first that holds it is the one, and the large ones
+                // (a pool of many faces) are wound around only when no small one holds it.
+                let mut around: Vec<usize> = (0..n)
                     .filter(|&q| {
                         self.volume[q] > 0.0
                             && self.phase[q] == self.phase[p]
                             && x.cmpge(bounds[q].0).all()
                             && x.cmple(bounds[q].1).all()
-                            && winding_number(mesh, &halves[q], x) > 0.5
                     })
-                    .min_by(|&q, &r| self.volume[q].total_cmp(&self.volume[r]))
+                    .collect();
+                around.sort_by(|&q, &r| self.volume[q].total_cmp(&self.volume[r]).then(q.cmp(&r)));
+                around
+                    .into_iter()
+                    .find(|&q| winding_number(mesh, &halves[q], x) > 0.5)
                     .map_or(NONE, |q| q as u32)
             })
             .collect()
@@ -336,6 +341,34 @@ mod tests {
         assert!((found.volume[1] - volumes[2]).abs() < 1e-14);
         assert_eq!(found.sides[0], [NONE, 0]);
         assert_eq!(found.sides[outer], [0, 1]);
+    }
+
+    /// Nested shells, phases 1, 2, 1, 2 from the outside in: each cavity belongs to the
+    /// smallest region of its phase around it (the innermost cavity of phase 1 lies inside
+    /// both phase-1 balls), so each shell is one component with its own volume.
+    #[test]
+    fn nested_cavities_belong_to_the_innermost_region() {
+        let c = DVec3::splat(0.5);
+        let shells = [(0.4, 1, 0), (0.3, 2, 1), (0.2, 1, 2), (0.1, 2, 1)];
+        let mut mesh = LabeledMesh::default();
+        for (r, inside, outside) in shells {
+            mesh.append(&icosphere(c, r, 3, inside, outside));
+        }
+        let found = Components::find(&mesh, 3, 0);
+        assert_eq!(found.phase, vec![1, 2, 1, 2]);
+        let ball = |k: usize| {
+            let (r, inside, _) = shells[k];
+            icosphere(c, r, 3, inside, 0).phase_volumes(3)[inside as usize]
+        };
+        for k in 0..4 {
+            let own = ball(k) - if k < 3 { ball(k + 1) } else { 0.0 };
+            // Sums of the same tetrahedra about other centres: rounding only.
+            assert!(
+                (found.volume[k] - own).abs() < 1e-14,
+                "{k}: {:?}",
+                found.volume
+            );
+        }
     }
 
     /// Three phases in a box (two quadrant columns and the background): each corrected phase
