@@ -13,7 +13,7 @@ use polyphase_tracker::{ply, MdTree, TrackerSnapshot};
 pub const FILE: &str = "checkpoint.bin";
 
 const MAGIC: &[u8; 8] = b"PPHASECK";
-const VERSION: u32 = 3;
+const VERSION: u32 = 4;
 
 /// Running totals of a run (timings differ between runs; they only feed the summary).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -70,6 +70,7 @@ impl Checkpoint {
                 mesh,
                 tree,
                 volume_targets,
+                component_targets,
                 carried_loss,
             } => {
                 let mut bytes = Vec::new();
@@ -80,6 +81,7 @@ impl Checkpoint {
                 put_u64(&mut w, tree.len() as u64);
                 w.extend_from_slice(&tree);
                 put_option(&mut w, volume_targets.as_deref(), put_f64s);
+                put_f64s(&mut w, component_targets);
                 put_f64s(&mut w, carried_loss);
             }
         }
@@ -137,6 +139,7 @@ impl Checkpoint {
         let tree_len = r.usize()?;
         let tree = MdTree::from_bytes(r.take(tree_len)?).context("tree")?;
         let volume_targets = r.option(Reader::f64s)?;
+        let component_targets = r.f64s()?;
         let carried_loss = r.f64s()?;
         let solver = r.option(|r| {
             Ok(SolverState {
@@ -167,6 +170,7 @@ impl Checkpoint {
                 mesh,
                 tree,
                 volume_targets,
+                component_targets,
                 carried_loss,
             },
             solver,
@@ -293,7 +297,8 @@ mod tests {
                 },
                 tree: MdTree::build(&grid, &ball),
                 volume_targets: Some(vec![1.0 / 3.0, 2.0 / 3.0]),
-                carried_loss: vec![0.0, -1e-7 / 3.0],
+                component_targets: vec![2.0 / 3.0],
+                carried_loss: vec![-1e-7 / 3.0],
             },
             solver: Some(SolverState {
                 time: 0.3000000000000001,

@@ -41,6 +41,7 @@ pub fn build_tracker(
                 mesh,
                 tree,
                 volume_targets,
+                component_targets,
                 carried_loss,
             }),
         ) => {
@@ -51,6 +52,7 @@ pub fn build_tracker(
                 n_phases,
                 background,
                 volume_targets,
+                component_targets,
                 carried_loss,
             );
             tracker.set_max_travel(scene.file.time.cfl * scene.grid.h);

@@ -14,6 +14,8 @@ use crate::query::MeshQuery;
 use crate::snapshot::TrackerSnapshot;
 use crate::tracker::departure_point;
 use crate::tracker::{InterfaceTracker, StepStats, TrackerError};
+use crate::volume_correction::components::Components;
+use crate::volume_correction::succession::{share_targets, Succession};
 use crate::volume_correction::{carried_loss, first_aim, missed, reaim, VolumeShift, MAX_RETRIES};
 
 /// Tracker state: the current mesh, its exact query structure and the redistanced tree.
@@ -26,9 +28,17 @@ pub struct ContourTracker {
     query: MeshQuery,
     /// Phase volumes each step's mesh is corrected back to; `None` turns the correction off.
     volume_targets: Option<Vec<f64>>,
-    /// Per phase, the last step's loss beyond what its correction aimed for; the next step
+    /// The current mesh's components (connected regions of a phase); empty while the
+    /// correction is off.
+    components: Components,
+    /// Per component, the volume it is corrected back to; a phase's sum to its target.
+    component_targets: Vec<f64>,
+    /// Per component, the last step's loss beyond what its correction aimed for; the next step
     /// aims that much above the target (see [`crate::volume_correction::carried_loss`]).
     carried_loss: Vec<f64>,
+    /// How a mesh's components are found: [`Components::find`] (a test swaps in the per-phase
+    /// grouping to show what that did).
+    find_components: fn(&LabeledMesh, usize, PhaseId) -> Components,
     /// How far (m) the interfaces may move in one step ([`ContourTracker::set_max_travel`]).
     max_travel: f64,
 }
@@ -49,23 +59,31 @@ impl ContourTracker {
     ) -> (ContourTracker, StepStats) {
         let (tree, mesh, query, stats) = rebuild(&grid, initial, background);
         let volume_targets = Some(mesh.phase_volumes(n_phases));
-        let tracker = ContourTracker {
+        let mut tracker = ContourTracker {
             grid,
             n_phases,
             background,
             tree,
             mesh,
             query,
-            volume_targets,
-            carried_loss: vec![0.0; n_phases],
+            volume_targets: None,
+            components: Components::default(),
+            component_targets: Vec::new(),
+            carried_loss: Vec::new(),
+            find_components: Components::find,
             max_travel: DEFAULT_TRAVEL_CELLS * grid.h,
         };
+        tracker.set_volume_targets(volume_targets);
         (tracker, stats)
     }
 
     /// A tracker from the saved state of another (a checkpoint): its mesh, its redistanced
-    /// tree, volume targets and carried loss ([`ContourTracker::carried_loss`]). It continues
-    /// exactly as the one they were taken from.
+    /// tree, the phases' volume targets, and its components' targets and carried loss
+    /// ([`ContourTracker::component_targets`], [`ContourTracker::carried_loss`]). It continues
+    /// exactly as the one they were taken from. Component state that does not fit the mesh's
+    /// components (another count) is started afresh, as [`ContourTracker::set_volume_targets`]
+    /// does.
+    #[allow(clippy::too_many_arguments)]
     pub fn from_parts(
         grid: GridSpec,
         mesh: LabeledMesh,
@@ -73,20 +91,34 @@ impl ContourTracker {
         n_phases: usize,
         background: PhaseId,
         volume_targets: Option<Vec<f64>>,
+        component_targets: Vec<f64>,
         carried_loss: Vec<f64>,
     ) -> ContourTracker {
         let query = MeshQuery::new(&mesh, background);
-        ContourTracker {
+        let mut tracker = ContourTracker {
             grid,
             n_phases,
             background,
             tree,
             mesh,
             query,
-            volume_targets,
-            carried_loss,
+            volume_targets: None,
+            components: Components::default(),
+            component_targets: Vec::new(),
+            carried_loss: Vec::new(),
+            find_components: Components::find,
             max_travel: DEFAULT_TRAVEL_CELLS * grid.h,
+        };
+        tracker.set_volume_targets(volume_targets);
+        let n = tracker.components.len();
+        if tracker.volume_targets.is_some()
+            && component_targets.len() == n
+            && carried_loss.len() == n
+        {
+            tracker.component_targets = component_targets;
+            tracker.carried_loss = carried_loss;
         }
+        tracker
     }
 
     /// The redistanced tree that answers [`ContourTracker::phi_chi`] away from the interface.
@@ -96,10 +128,28 @@ impl ContourTracker {
 
     /// Sets the per-phase volumes every step's mesh is corrected back to (see
     /// [`crate::volume_correction`]); `None` switches the correction off. By default the
-    /// targets are the first mesh's volumes. The carried loss starts again from zero.
+    /// targets are the first mesh's volumes. Each phase's target is shared among its
+    /// components by volume, and the carried loss starts again from zero.
     pub fn set_volume_targets(&mut self, targets: Option<Vec<f64>>) {
+        self.components = match &targets {
+            Some(_) => (self.find_components)(&self.mesh, self.n_phases, self.background),
+            None => Components::default(),
+        };
+        let n = self.components.len();
+        self.component_targets = match &targets {
+            Some(phase_targets) => share_targets(&vec![None; n], &self.components, phase_targets),
+            None => Vec::new(),
+        };
+        self.carried_loss = vec![0.0; n];
         self.volume_targets = targets;
-        self.carried_loss = vec![0.0; self.n_phases];
+    }
+
+    /// Takes all components of a phase as one from now on: the per-phase correction that the
+    /// per-component one replaced, for the tests that show the difference.
+    #[cfg(test)]
+    pub(crate) fn correct_whole_phases(&mut self) {
+        self.find_components = Components::whole_phases;
+        self.set_volume_targets(self.volume_targets.clone());
     }
 
     /// Sets how far (m) the interfaces may move in one step (a scene's `time.cfl` cells);
@@ -113,7 +163,18 @@ impl ContourTracker {
         self.volume_targets.as_deref()
     }
 
-    /// Per phase, the last step's loss the next step adds to its target (zeros when the
+    /// The current mesh's components the correction keeps (empty while it is off).
+    pub fn components(&self) -> &Components {
+        &self.components
+    }
+
+    /// Per component, the volume the correction restores; part of the state a checkpoint
+    /// saves.
+    pub fn component_targets(&self) -> &[f64] {
+        &self.component_targets
+    }
+
+    /// Per component, the last step's loss the next step adds to its target (empty when the
     /// correction is off); part of the state a checkpoint saves.
     pub fn carried_loss(&self) -> &[f64] {
         &self.carried_loss
@@ -187,9 +248,7 @@ impl PhaseSampler for Departure<'_> {
         }
         let x0 = x0.clamp(self.lo, self.hi);
         let n = match &self.shift {
-            Some(shift) => self
-                .previous
-                .query_shifted(x0, &|front, back| shift.shift(front, back)),
+            Some(shift) => self.previous.query_shifted(x0, &|t| shift.shift(t)),
             None => self.previous.query_curved(x0),
         };
         (n.distance, n.phase)
@@ -217,15 +276,16 @@ impl InterfaceTracker for ContourTracker {
         let mut aim = self
             .volume_targets
             .as_ref()
-            .map(|targets| first_aim(targets, &self.carried_loss));
-        let before = aim.as_ref().map(|_| self.mesh.phase_volumes(self.n_phases));
-        let mut retried: Vec<(&'static str, f64)> = Vec::new();
+            .map(|_| first_aim(&self.component_targets, &self.carried_loss));
+        let (lo, hi) = (self.grid.origin, self.grid.upper());
+        let back_to_departure = |x: DVec3| departure_point(velocity, x, t, dt).clamp(lo, hi);
+        let mut more_stages: Vec<(&'static str, f64)> = Vec::new();
         let mut retries = 0;
-        let (tree, mesh, query, mut stats) = loop {
+        let ((tree, mesh, query, mut stats), next) = loop {
             // A quarter cell per step at most: a sheet lost in one step comes back over a few.
             departure.shift = aim
                 .as_ref()
-                .map(|aim| VolumeShift::new(&self.mesh, aim, self.background, 0.25 * self.grid.h));
+                .map(|aim| VolumeShift::new(&self.mesh, &self.components, aim, 0.25 * self.grid.h));
             let built = rebuild(&self.grid, &departure, self.background);
             if bad.load(Ordering::Relaxed) {
                 let c = (self.grid.origin + self.grid.upper()) * 0.5;
@@ -237,34 +297,68 @@ impl InterfaceTracker for ContourTracker {
                     t,
                 });
             }
-            let (Some(targets), Some(shift), Some(aim)) =
+            let (Some(phase_targets), Some(shift), Some(aim)) =
                 (&self.volume_targets, &departure.shift, &mut aim)
             else {
-                break built;
+                break (built, None);
             };
-            let after = built.1.phase_volumes(self.n_phases);
-            if retries == MAX_RETRIES || !missed(shift.aimed(), &after, targets) {
-                self.carried_loss = carried_loss(shift.aimed(), &after, targets);
-                break built;
+            let started = Instant::now();
+            let found = (self.find_components)(&built.1, self.n_phases, self.background);
+            let traced = Instant::now();
+            let succession = Succession::trace(
+                &self.mesh,
+                &self.query,
+                &self.components,
+                &built.1,
+                &found,
+                &back_to_departure,
+            );
+            more_stages.push(("components", (traced - started).as_secs_f64()));
+            more_stages.push(("succession", traced.elapsed().as_secs_f64()));
+            let targets = &self.component_targets;
+            let after = succession.pull_back(&found.volume, targets);
+            let floor = self.grid.h.powi(3);
+            if retries == MAX_RETRIES || !missed(shift.aimed(), &after, targets, floor) {
+                let carried = carried_loss(shift.aimed(), &after, targets);
+                let inherited = succession.push_forward(targets, &found.volume);
+                let next = (
+                    share_targets(&inherited, &found, phase_targets),
+                    succession
+                        .push_forward(&carried, &found.volume)
+                        .into_iter()
+                        .map(|c| c.unwrap_or(0.0))
+                        .collect(),
+                    found,
+                );
+                break (built, Some(next));
             }
             reaim(aim, shift.aimed(), &after, targets);
-            retried.extend(built.3.stages);
+            more_stages.extend(built.3.stages);
             retries += 1;
         };
-        // The discarded tries' time counts in their stages.
-        for (name, secs) in retried {
+        // The discarded tries' time counts in their stages, as does the correction's
+        // bookkeeping (finding and tracing the components).
+        for (name, secs) in more_stages {
             match stats.stages.iter_mut().find(|(n, _)| *n == name) {
                 Some((_, total)) => *total += secs,
                 None => stats.stages.push((name, secs)),
             }
         }
-        if let (Some(before), Some(shift)) = (before, &departure.shift) {
-            stats.volume_correction = shift
-                .aimed()
-                .iter()
-                .zip(before)
-                .map(|(aimed, v)| aimed.map_or(0.0, |a| a - v))
-                .collect();
+        if let Some(shift) = &departure.shift {
+            let mut given = vec![0.0; self.n_phases];
+            for (c, aimed) in shift.aimed().iter().enumerate() {
+                if let (Some(a), Some(g)) =
+                    (aimed, given.get_mut(self.components.phase[c] as usize))
+                {
+                    *g += a - self.components.volume[c];
+                }
+            }
+            stats.volume_correction = given;
+        }
+        if let Some((targets, carried, components)) = next {
+            self.component_targets = targets;
+            self.carried_loss = carried;
+            self.components = components;
         }
         self.tree = tree;
         self.mesh = mesh;
@@ -289,6 +383,7 @@ impl InterfaceTracker for ContourTracker {
             mesh: self.mesh.clone(),
             tree: self.tree.clone(),
             volume_targets: self.volume_targets.clone(),
+            component_targets: self.component_targets.clone(),
             carried_loss: self.carried_loss.clone(),
         })
     }

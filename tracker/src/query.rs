@@ -148,6 +148,13 @@ impl MeshQuery {
             .map(|(n, _, _)| n)
     }
 
+    /// The source mesh's index of the interface triangle nearest to `x` (`None` without
+    /// interfaces): the volume correction traces components back through it.
+    pub fn nearest_triangle(&self, x: DVec3) -> Option<usize> {
+        self.locate(x, f64::INFINITY)
+            .map(|(_, _, t)| self.source[t] as usize)
+    }
+
     /// Unsigned distance from `x` to the nearest interface point (infinite without interfaces).
     pub fn distance(&self, x: DVec3) -> f64 {
         let mut best = None;
@@ -185,13 +192,14 @@ impl MeshQuery {
     /// paper's text does not address. Corners whose smooth normal is more than 25° from the
     /// facet's (sharp features, junction lines) keep the flat facet there, so features stay sharp.
     pub fn query_curved(&self, x: DVec3) -> Nearest {
-        self.query_shifted(x, &|_, _| 0.0)
+        self.query_shifted(x, &|_| 0.0)
     }
 
-    /// [`MeshQuery::query_curved`] with every interface moved along its normal, towards its
-    /// front phase, by `shift(front, back)` (negative: towards the back phase), as a level-set
-    /// offset of the signed distance: the volume correction of [`crate::volume_correction`].
-    pub fn query_shifted(&self, x: DVec3, shift: &dyn Fn(PhaseId, PhaseId) -> f64) -> Nearest {
+    /// [`MeshQuery::query_curved`] with every interface triangle `t` (its index in the source
+    /// mesh) moved along its normal, towards its front phase, by `shift(t)` (negative: towards
+    /// the back phase), as a level-set offset of the signed distance: the volume correction of
+    /// [`crate::volume_correction`].
+    pub fn query_shifted(&self, x: DVec3, shift: &dyn Fn(usize) -> f64) -> Nearest {
         let Some((n, _, t)) = self.locate(x, f64::INFINITY) else {
             return self.query(x);
         };
@@ -204,7 +212,7 @@ impl MeshQuery {
             return n;
         };
         let normal = self.tris[t].normal;
-        let bulge = self.bulge(t, n.point) + shift(front, back);
+        let bulge = self.bulge(t, n.point) + shift(self.source[t] as usize);
         let curved = signed - bulge;
         Nearest {
             distance: curved.abs(),

@@ -8,11 +8,13 @@ use crate::mesh::LabeledMesh;
 #[derive(Clone, Debug)]
 pub enum TrackerSnapshot {
     /// The contouring tracker: its mesh, the redistanced tree that answers φ, χ away from the
-    /// interface, the volume-correction targets and the loss carried into the next step.
+    /// interface, the volume-correction targets (per phase, and per component of the mesh)
+    /// and each component's loss carried into the next step.
     Contour {
         mesh: LabeledMesh,
         tree: MdTree,
         volume_targets: Option<Vec<f64>>,
+        component_targets: Vec<f64>,
         carried_loss: Vec<f64>,
     },
 }

@@ -1,5 +1,6 @@
-//! Per-phase volume correction: a small offset of the interfaces along their normals that gives
-//! every phase back the volume it is meant to hold.
+//! Volume correction: a small offset of the interfaces along their normals that gives every
+//! connected region of a phase (a "component": one drop, one pool) back the volume it is meant
+//! to hold.
 //!
 //! Paper 004 has no such step: each semi-Lagrangian resampling loses a little of the thin parts
 //! (paper 004 §7.3 reports the loss on the Enright test), and coupled liquids lose a few percent
@@ -7,105 +8,139 @@
 //! mesh's interfaces while it reads φ, χ off them at the departure points (a level-set offset
 //! of the signed distance, so the new mesh is contoured clean; moving the mesh's vertices
 //! instead folds the slivers contouring leaves). The offsets come from one "pressure" `p` per
-//! phase: the interface between phases `a` and `b` moves by `p_a − p_b` towards `b`, so phase
-//! `a` changes by `Σ_b A_ab (p_a − p_b)`, a weighted graph Laplacian of the phase adjacency with
-//! the background phase held at `p = 0` (it absorbs the change; in a closed box it is the
-//! complement of the others).
+//! component ([`components`]): the faces between components `a` and `b` move by `p_a − p_b`
+//! towards `b`, so `a` changes by `Σ_b A_ab (p_a − p_b)`, a weighted graph Laplacian of the
+//! component adjacency with the background phase held at `p = 0` (it absorbs the change; in a
+//! closed box it is the complement of the others). It is solved per cluster of components that
+//! touch one another (most drops touch only the background: one equation each).
+//!
+//! Each component has its own target, so a drop that loses volume is given back its own loss,
+//! not a share of its phase's: one pressure per phase moved the loss of a stretched drop onto
+//! every other drop of the phase. The targets follow the components through time
+//! ([`succession`]): a component that continues keeps its target, merging components add
+//! theirs, a splitting one shares its target among the pieces by volume, one that appears
+//! (a sub-cell speck) starts at its own volume, and what vanishes less what appears is shared
+//! by all the phase's components in proportion to their volume, so a phase's components always
+//! sum to the phase's target. A first mesh shares each phase's target by volume; with one
+//! component per phase this is the per-phase correction.
 //!
 //! The offset is applied to the previous mesh, and the step's resampling then loses again what
 //! it loses (a shattered ball ~10 % per step), so aiming at the target would end each step one
-//! loss short. Two controls close that gap: the loss of each step beyond what its offset aimed
-//! for is carried into the next step's aim (feed-forward, [`carried_loss`]), and a step whose
-//! mesh still misses a target by more than [`MISS_TOLERANCE`] (a sudden splash) is contoured
-//! again with the aim moved by the miss ([`reaim`], at most [`MAX_RETRIES`] times).
+//! loss short. Two controls close that gap, per component: the loss of each step beyond what
+//! its offset aimed for is carried into the next step's aim (feed-forward, [`carried_loss`],
+//! handed on like the targets), and a step whose mesh still misses a target by more than
+//! [`MISS_TOLERANCE`] (a sudden splash) is contoured again with the aim moved by the miss
+//! ([`reaim`], at most [`MAX_RETRIES`] times). Both compare a component of the previous mesh
+//! with the volume its group of descendants ends with ([`succession::Succession::pull_back`]).
 
-use polyphase_grid::{PhaseId, OUTSIDE};
+pub mod components;
+pub mod succession;
+
+use std::collections::BTreeMap;
+
+use polyphase_grid::OUTSIDE;
 
 use crate::mesh::LabeledMesh;
+use components::{root, union, Components, NONE};
 
-/// The interface offsets that bring each phase of a mesh to its target volume.
+/// The interface offsets that bring each component of a mesh to its target volume.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VolumeShift {
-    pressures: Vec<f64>,
-    cap: f64,
-    /// Per phase, the volume the capped offsets give it to first order; `None` for a phase the
-    /// correction leaves alone.
+    /// Per triangle of the mesh, how far it moves towards its front phase.
+    shifts: Vec<f64>,
+    /// Per component, the volume the capped offsets give it to first order; `None` for a
+    /// component the correction leaves alone.
     aimed: Vec<Option<f64>>,
 }
 
 impl VolumeShift {
-    /// Offsets for `mesh` towards `targets[phase]`. The background phase is not corrected (it
-    /// takes up the difference); phases without an interface, or with a target of zero, are
-    /// left alone; no interface moves more than `cap`, so a large loss is given back over
-    /// several steps.
-    pub fn new(mesh: &LabeledMesh, targets: &[f64], background: PhaseId, cap: f64) -> Self {
-        let n = targets.len();
-        let volumes = mesh.phase_volumes(n);
-        let areas = interface_areas(mesh, n);
+    /// Offsets for `mesh`, whose components are `components`, towards `targets[component]`.
+    /// Components without an interface, or with a target of zero, are left alone (as is the
+    /// background, which is no component); no interface moves more than `cap`, so a large
+    /// loss is given back over several steps.
+    pub fn new(mesh: &LabeledMesh, components: &Components, targets: &[f64], cap: f64) -> Self {
+        let n = components.len();
         let corrected: Vec<bool> = (0..n)
-            .map(|i| {
-                i != background as usize && targets[i] > 0.0 && areas[i].iter().sum::<f64>() > 0.0
-            })
+            .map(|c| targets.get(c).is_some_and(|&t| t > 0.0) && components.area[c] > 0.0)
             .collect();
         let deficit: Vec<f64> = (0..n)
-            .map(|i| {
-                if corrected[i] {
-                    targets[i] - volumes[i]
+            .map(|c| {
+                if corrected[c] {
+                    targets[c] - components.volume[c]
                 } else {
                     0.0
                 }
             })
             .collect();
-        let mut shift = VolumeShift {
-            pressures: solve_pressures(&areas, &deficit, &corrected),
-            cap,
-            aimed: Vec::new(),
+        let pressures = solve_pressures(mesh, components, &corrected, &deficit);
+        let p = |c: u32| {
+            if c == NONE {
+                0.0
+            } else {
+                pressures[c as usize]
+            }
         };
-        shift.aimed = (0..n)
-            .map(|a| {
-                corrected[a].then(|| {
-                    let change: f64 = (0..n)
-                        .filter(|&b| b != a)
-                        .map(|b| areas[a][b] * shift.shift(b as PhaseId, a as PhaseId))
-                        .sum();
-                    volumes[a] + change
-                })
+        let shifts: Vec<f64> = (0..mesh.triangle_count())
+            .map(|t| {
+                let [front, back] = components.sides[t];
+                if mesh.labels[t].contains(&OUTSIDE) {
+                    0.0
+                } else {
+                    (p(back) - p(front)).clamp(-cap, cap)
+                }
             })
             .collect();
-        shift
+        let mut change = vec![0.0; n];
+        for (t, &shift) in shifts.iter().enumerate() {
+            if shift == 0.0 {
+                continue;
+            }
+            let [front, back] = components.sides[t];
+            let a = mesh.area(t);
+            if front != NONE {
+                change[front as usize] -= a * shift;
+            }
+            if back != NONE {
+                change[back as usize] += a * shift;
+            }
+        }
+        let aimed = (0..n)
+            .map(|c| corrected[c].then(|| components.volume[c] + change[c]))
+            .collect();
+        VolumeShift { shifts, aimed }
     }
 
-    /// The volume each phase is offset to, to first order in the offset and after the cap:
-    /// the current volume plus `Σ_b A_ab · shift`. `None` for the background, for phases
-    /// without an interface and for phases with a target of zero.
+    /// The volume each component is offset to, to first order in the offset and after the
+    /// cap: its current volume plus `Σ_b A_ab · shift`. `None` for components without an
+    /// interface and for those with a target of zero.
     pub fn aimed(&self) -> &[Option<f64>] {
         &self.aimed
     }
 
-    /// How far the interface between `front` and `back` moves towards `front` (so `back`
-    /// grows); negative moves it towards `back`.
-    pub fn shift(&self, front: PhaseId, back: PhaseId) -> f64 {
-        let p = |phase: PhaseId| self.pressures.get(phase as usize).copied().unwrap_or(0.0);
-        (p(back) - p(front)).clamp(-self.cap, self.cap)
+    /// How far triangle `t` of the mesh moves towards its front phase (so its back phase
+    /// grows); negative moves it towards the back phase.
+    pub fn shift(&self, t: usize) -> f64 {
+        self.shifts.get(t).copied().unwrap_or(0.0)
     }
 }
 
-/// The largest loss carried into the next step, as a fraction of the phase's target: a step
-/// that tore a phase apart cannot make the next one inflate it by more (a shattered ball of the
+/// The largest loss carried into the next step, as a fraction of the component's target: a
+/// step that tore a drop apart cannot make the next one inflate it by more (a shattered ball of the
 /// built-in scenes loses up to ~14 % per step at their default resolutions).
 pub const MAX_CARRIED_FRACTION: f64 = 0.2;
 
-/// How far from its target a phase's aim may go on a step's retry, as a fraction of the target.
+/// How far from its target a component's aim may go on a step's retry, as a fraction of the
+/// target.
 pub const MAX_AIM_FRACTION: f64 = 0.25;
 
-/// A step whose mesh misses any corrected phase's target by more than this fraction of it is
+/// A step whose mesh misses any corrected component's target by more than this fraction of it is
 /// contoured again, from the same previous mesh, with the aim moved by the miss.
 pub const MISS_TOLERANCE: f64 = 0.01;
 
 /// Retries a step may take (each costs one more build, contour and redistance).
 pub const MAX_RETRIES: usize = 2;
 
-/// The volumes a step's correction aims for: each phase's target plus the loss carried from the
+/// The volumes a step's correction aims for: each component's target plus the loss carried from the
 /// step before ([`carried_loss`]).
 pub fn first_aim(targets: &[f64], carried: &[f64]) -> Vec<f64> {
     targets
@@ -115,11 +150,11 @@ pub fn first_aim(targets: &[f64], carried: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// Feed-forward of the resampling loss: per phase, how much the step just taken fell short of
+/// Feed-forward of the resampling loss: per component, how much the step just taken fell short of
 /// the volume its correction aimed for (`aimed − after`, see [`VolumeShift::aimed`]); the next
 /// step adds it to the target so that it ends on the target rather than one step's loss short.
-/// Clamped to ±[`MAX_CARRIED_FRACTION`] of the target; zero for phases the correction left
-/// alone and for phases the step made vanish, so nothing is inflated from nothing.
+/// Clamped to ±[`MAX_CARRIED_FRACTION`] of the target; zero for components the correction left
+/// alone and for those the step made vanish, so nothing is inflated from nothing.
 pub fn carried_loss(aimed: &[Option<f64>], after: &[f64], targets: &[f64]) -> Vec<f64> {
     targets
         .iter()
@@ -134,15 +169,20 @@ pub fn carried_loss(aimed: &[Option<f64>], after: &[f64], targets: &[f64]) -> Ve
         .collect()
 }
 
-/// Whether a phase the step corrected (and did not make vanish) ended further than
-/// [`MISS_TOLERANCE`] of its target from it.
-pub fn missed(aimed: &[Option<f64>], after: &[f64], targets: &[f64]) -> bool {
+/// Whether a component the step corrected (and did not make vanish) ended further than
+/// [`MISS_TOLERANCE`] of its target, and further than `floor` (m³), from it. The tracker's
+/// floor is one cell's volume: a speck of a few cells cannot be contoured to 1 %, and would
+/// otherwise make every step of a splash take all its retries.
+pub fn missed(aimed: &[Option<f64>], after: &[f64], targets: &[f64], floor: f64) -> bool {
     targets.iter().enumerate().any(|(i, &target)| {
-        present(aimed, after, i).is_some_and(|(_, v)| (v - target).abs() > MISS_TOLERANCE * target)
+        present(aimed, after, i).is_some_and(|(_, v)| {
+            let miss = (v - target).abs();
+            miss > MISS_TOLERANCE * target && miss > floor
+        })
     })
 }
 
-/// Moves the aim of every phase the step corrected by what it missed its target by, for the
+/// Moves the aim of every component the step corrected by what it missed its target by, for the
 /// step's retry from the same mesh (the resampling loss changes little with the aim, so the
 /// retry lands close to the target); the aim stays within ±[`MAX_AIM_FRACTION`] of the target.
 pub fn reaim(aim: &mut [f64], aimed: &[Option<f64>], after: &[f64], targets: &[f64]) {
@@ -154,45 +194,89 @@ pub fn reaim(aim: &mut [f64], aimed: &[Option<f64>], after: &[f64], targets: &[f
     }
 }
 
-/// Phase `i`'s aimed and resulting volumes, if the correction moved it and it is still there.
+/// Component `i`'s aimed and resulting volumes, if the correction moved it and it is still there.
 fn present(aimed: &[Option<f64>], after: &[f64], i: usize) -> Option<(f64, f64)> {
     let aim = aimed.get(i).copied().flatten()?;
     let v = after.get(i).copied().filter(|&v| v > 0.0)?;
     Some((aim, v))
 }
 
-/// `A[a][b]`: area of the interface between phases `a` and `b` (symmetric; domain-boundary faces
-/// excluded).
-fn interface_areas(mesh: &LabeledMesh, n: usize) -> Vec<Vec<f64>> {
-    let mut areas = vec![vec![0.0; n]; n];
-    for (t, &[front, back]) in mesh.labels.iter().enumerate() {
-        let (f, b) = (front as usize, back as usize);
-        if front == OUTSIDE || back == OUTSIDE || f >= n || b >= n {
+/// Solves `Σ_b A_ab (p_a − p_b) = deficit_a` for the corrected components (`A_ab` the area of
+/// the faces between them), `p = 0` for the others: one dense system per cluster of corrected
+/// components that share faces, by [`solve_dense`].
+fn solve_pressures(
+    mesh: &LabeledMesh,
+    components: &Components,
+    corrected: &[bool],
+    deficit: &[f64],
+) -> Vec<f64> {
+    let n = corrected.len();
+    let is_corrected = |c: u32| c != NONE && corrected[c as usize];
+    let mut diagonal = vec![0.0; n];
+    let mut coupling: BTreeMap<(u32, u32), f64> = BTreeMap::new();
+    for t in 0..mesh.triangle_count() {
+        if mesh.labels[t].contains(&OUTSIDE) {
             continue;
         }
+        let [front, back] = components.sides[t];
         let a = mesh.area(t);
-        areas[f][b] += a;
-        areas[b][f] += a;
+        for c in [front, back].into_iter().filter(|&c| is_corrected(c)) {
+            diagonal[c as usize] += a;
+        }
+        if is_corrected(front) && is_corrected(back) && front != back {
+            *coupling
+                .entry((front.min(back), front.max(back)))
+                .or_default() += a;
+        }
     }
-    areas
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    for &(a, b) in coupling.keys() {
+        union(&mut parent, a, b);
+    }
+    // Clusters numbered by their first component; each component's row in its cluster.
+    let mut cluster_of_root: BTreeMap<u32, usize> = BTreeMap::new();
+    let mut members: Vec<Vec<usize>> = Vec::new();
+    let mut place = vec![(0, 0); n];
+    for c in (0..n).filter(|&c| corrected[c]) {
+        let r = root(&mut parent, c as u32);
+        let k = *cluster_of_root.entry(r).or_insert_with(|| {
+            members.push(Vec::new());
+            members.len() - 1
+        });
+        place[c] = (k, members[k].len());
+        members[k].push(c);
+    }
+    let mut systems: Vec<Vec<Vec<f64>>> = members
+        .iter()
+        .map(|list| {
+            let m = list.len();
+            let mut a = vec![vec![0.0; m + 1]; m];
+            for (r, &c) in list.iter().enumerate() {
+                a[r][r] = diagonal[c];
+                a[r][m] = deficit[c];
+            }
+            a
+        })
+        .collect();
+    for (&(x, y), &area) in &coupling {
+        let ((k, r), (_, c)) = (place[x as usize], place[y as usize]);
+        systems[k][r][c] -= area;
+        systems[k][c][r] -= area;
+    }
+    let mut p = vec![0.0; n];
+    for (list, a) in members.iter().zip(systems) {
+        for (&c, v) in list.iter().zip(solve_dense(a)) {
+            p[c] = v;
+        }
+    }
+    p
 }
 
-/// Solves `Σ_b A_ab (p_a − p_b) = deficit_a` for the corrected phases, `p = 0` for the others
-/// (Gaussian elimination with partial pivoting; at most a few dozen phases). A corrected phase
-/// cut off from every uncorrected one makes the system singular: its row then gets `p = 0`.
-fn solve_pressures(areas: &[Vec<f64>], deficit: &[f64], corrected: &[bool]) -> Vec<f64> {
-    let idx: Vec<usize> = (0..deficit.len()).filter(|&i| corrected[i]).collect();
-    let m = idx.len();
-    let mut a = vec![vec![0.0; m + 1]; m];
-    for (r, &i) in idx.iter().enumerate() {
-        a[r][r] = areas[i].iter().sum();
-        for (c, &j) in idx.iter().enumerate() {
-            if c != r {
-                a[r][c] = -areas[i][j];
-            }
-        }
-        a[r][m] = deficit[i];
-    }
+/// Solves the `m × m` system whose augmented rows are `a` (Gaussian elimination with partial
+/// pivoting). A cluster cut off from every uncorrected region makes the system singular: a
+/// row without a pivot gets 0.
+fn solve_dense(mut a: Vec<Vec<f64>>) -> Vec<f64> {
+    let m = a.len();
     let scale = a
         .iter()
         .map(|row| row[..m].iter().map(|v| v.abs()).fold(0.0, f64::max))
@@ -217,13 +301,9 @@ fn solve_pressures(areas: &[Vec<f64>], deficit: &[f64], corrected: &[bool]) -> V
             }
         }
     }
-    let mut p = vec![0.0; deficit.len()];
-    for (r, &i) in idx.iter().enumerate() {
-        if solved[r] {
-            p[i] = a[r][m] / a[r][r];
-        }
-    }
-    p
+    (0..m)
+        .map(|r| if solved[r] { a[r][m] / a[r][r] } else { 0.0 })
+        .collect()
 }
 
 #[cfg(test)]
@@ -233,48 +313,97 @@ mod tests {
     use crate::mesh::fixtures::{icosphere, lattice_mesh};
     use crate::tracker::InterfaceTracker;
     use glam::DVec3;
-    use polyphase_grid::{GridSpec, VelocityField};
+    use polyphase_grid::{GridSpec, PhaseId, VelocityField};
     use std::f64::consts::PI;
 
     /// Two phases: the interface moves by exactly deficit / area (the only equation).
     #[test]
     fn two_phases_move_by_deficit_over_area() {
         let mesh = icosphere(DVec3::splat(0.5), 0.2, 3, 1, 0);
-        let volume = mesh.phase_volumes(2)[1];
+        let components = Components::find(&mesh, 2, 0);
+        assert_eq!(components.len(), 1);
+        let volume = components.volume[0];
         let area: f64 = (0..mesh.triangle_count()).map(|t| mesh.area(t)).sum();
-        let shift = VolumeShift::new(&mesh, &[0.0, volume + 1e-4], 0, 1.0);
+        let shift = VolumeShift::new(&mesh, &components, &[volume + 1e-4], 1.0);
         // The icosphere's normals point out, into phase 0 (front): phase 1 grows outwards.
         let expected = 1e-4 / area;
-        assert!((shift.shift(0, 1) - expected).abs() < 1e-12 * expected.max(1.0));
-        assert_eq!(shift.shift(1, 0), -shift.shift(0, 1));
-        let capped = VolumeShift::new(&mesh, &[0.0, volume + 1e-4], 0, 0.1 * expected);
-        assert_eq!(capped.shift(0, 1), 0.1 * expected);
+        for t in 0..mesh.triangle_count() {
+            assert!((shift.shift(t) - expected).abs() < 1e-12 * expected.max(1.0));
+        }
+        let capped = VolumeShift::new(&mesh, &components, &[volume + 1e-4], 0.1 * expected);
+        assert_eq!(capped.shift(0), 0.1 * expected);
+    }
+
+    /// Per component, the change the offsets make to first order: `Σ` over its faces of area ×
+    /// how far the face moves into its other side.
+    fn first_order_change(
+        mesh: &LabeledMesh,
+        components: &Components,
+        shift: &VolumeShift,
+    ) -> Vec<f64> {
+        let mut change = vec![0.0; components.len()];
+        for t in 0..mesh.triangle_count() {
+            let [front, back] = components.sides[t];
+            let grown = mesh.area(t) * shift.shift(t);
+            if front != NONE {
+                change[front as usize] -= grown;
+            }
+            if back != NONE {
+                change[back as usize] += grown;
+            }
+        }
+        change
     }
 
     /// Three phases in a box: the offsets solve the Laplacian, `Σ_b A_ab (p_a − p_b)` equals
-    /// each corrected phase's deficit, and the background does not move on its own.
+    /// each corrected component's deficit, and the background does not move on its own.
     #[test]
-    fn offsets_solve_the_phase_laplacian() {
+    fn offsets_solve_the_component_laplacian() {
         let mesh = lattice_mesh(6, |i, j, _| match (i < 3, j < 3) {
             (true, true) => 1,
             (false, true) => 2,
             _ => 0,
         });
-        let volumes = mesh.phase_volumes(3);
-        let targets = [0.0, volumes[1] * 1.02, volumes[2] * 0.97];
-        let shift = VolumeShift::new(&mesh, &targets, 0, f64::INFINITY);
-        let areas = interface_areas(&mesh, 3);
-        for a in 1..3u16 {
-            let change: f64 = (0..3u16)
-                .filter(|&b| b != a)
-                .map(|b| areas[a as usize][b as usize] * shift.shift(b, a))
-                .sum();
-            let deficit = targets[a as usize] - volumes[a as usize];
+        let components = Components::find(&mesh, 3, 0);
+        let targets = [components.volume[0] * 1.02, components.volume[1] * 0.97];
+        let shift = VolumeShift::new(&mesh, &components, &targets, f64::INFINITY);
+        let change = first_order_change(&mesh, &components, &shift);
+        for c in 0..2 {
+            let deficit = targets[c] - components.volume[c];
             // Gaussian elimination on a 2×2 system: round-off only.
             assert!(
-                (change - deficit).abs() < 1e-12,
-                "{a}: {change} vs {deficit}"
+                (change[c] - deficit).abs() < 1e-12,
+                "{c}: {change:?} vs {deficit}"
             );
+            assert_eq!(shift.aimed()[c], Some(components.volume[c] + change[c]));
+        }
+    }
+
+    /// Two balls of one phase with different deficits: each ball's faces move by its own
+    /// deficit over its own area, where one pressure for the phase moved both alike.
+    #[test]
+    fn each_drop_gets_its_own_offset() {
+        let mut mesh = icosphere(DVec3::new(0.3, 0.5, 0.5), 0.15, 3, 1, 0);
+        let first = mesh.triangle_count();
+        mesh.append(&icosphere(DVec3::new(0.7, 0.5, 0.5), 0.15, 3, 1, 0));
+        let components = Components::find(&mesh, 2, 0);
+        assert_eq!(components.len(), 2);
+        let deficits = [2e-4, -1e-4];
+        let targets = [0, 1].map(|c| components.volume[c] + deficits[c]);
+        let shift = VolumeShift::new(&mesh, &components, &targets, 1.0);
+        for (c, faces) in [0..first, first..mesh.triangle_count()]
+            .into_iter()
+            .enumerate()
+        {
+            let expected = deficits[c] / components.area[c];
+            for t in faces {
+                // One equation per ball: deficit / area, up to rounding.
+                assert!(
+                    (shift.shift(t) - expected).abs() < 1e-12,
+                    "{c}: {}",
+                    shift.shift(t)
+                );
+            }
         }
     }
 
@@ -365,7 +494,7 @@ mod tests {
                 "step {s}: volume {v}, target {target}, one loss {}",
                 loss * target
             );
-            let carried = tracker.carried_loss()[1] / target;
+            let carried = tracker.carried_loss()[0] / target;
             // The step lost `loss` of what it aimed for, and it aimed about `loss` above the
             // target: the carried loss is `loss` of that aim, to a tenth.
             assert!(
@@ -373,6 +502,127 @@ mod tests {
                 "step {s}: carried {carried}, loss {loss}"
             );
         }
+    }
+
+    /// Contraction towards `centre` within `reach` of it (a loss of fixed size per step, as
+    /// [`Shrink`]), rest everywhere else.
+    struct ShrinkNear {
+        centre: DVec3,
+        reach: f64,
+        k: f64,
+    }
+    impl VelocityField for ShrinkNear {
+        fn velocity(&self, x: DVec3, _: f64) -> DVec3 {
+            let d = x - self.centre;
+            if d.length() < self.reach {
+                -self.k * d
+            } else {
+                DVec3::ZERO
+            }
+        }
+    }
+
+    /// Per component of `phase` of the tracker's three-phase mesh (found afresh, whatever
+    /// grouping the tracker corrects by): its volume and whether it lies left of `x = 0.5`
+    /// (the mean of its faces' centroids).
+    fn drops(tracker: &ContourTracker, phase: PhaseId) -> Vec<(f64, bool)> {
+        let mesh = tracker.mesh();
+        let components = Components::find(mesh, 3, 0);
+        let mut sum = vec![(0.0, 0.0); components.len()];
+        for t in 0..mesh.triangle_count() {
+            let x = mesh.corners(t).iter().map(|c| c.x).sum::<f64>() / 3.0;
+            for c in components.sides[t].into_iter().filter(|&c| c != NONE) {
+                sum[c as usize].0 += x;
+                sum[c as usize].1 += 1.0;
+            }
+        }
+        (0..components.len())
+            .filter(|&c| components.phase[c] == phase)
+            .map(|c| (components.volume[c], sum[c].0 / sum[c].1 < 0.5))
+            .collect()
+    }
+
+    /// Two drops of phase 1, one contracting (4.9 % of it per step) and one at rest, above a
+    /// resting layer of phase 2, in air: per component, each drop ends each step on its own
+    /// volume; one pressure for the phase (the correction this replaced) gives half the
+    /// contracting drop's loss to the resting one, which grows while the other shrinks.
+    #[test]
+    fn each_drop_gets_its_own_loss_back() {
+        let grid = GridSpec {
+            origin: DVec3::ZERO,
+            h: 1.0 / 32.0,
+            dims: [32, 32, 32],
+        };
+        let (left, right) = (DVec3::new(0.27, 0.5, 0.6), DVec3::new(0.73, 0.5, 0.6));
+        let scene = |x: DVec3| {
+            let a = (x - left).length() - 0.15;
+            let b = (x - right).length() - 0.15;
+            let layer = x.z - 0.2;
+            let d = a.min(b).min(layer);
+            let phase = if layer < 0.0 {
+                2
+            } else if a.min(b) < 0.0 {
+                1
+            } else {
+                0
+            };
+            (d.abs(), phase)
+        };
+        let (dt, k): (f64, f64) = (1.0, 0.05 / 3.0);
+        let flow = ShrinkNear {
+            centre: left,
+            reach: 0.22,
+            k,
+        };
+        let steps = 5;
+        let run = |whole_phases: bool| {
+            let mut tracker = ContourTracker::new(grid, &scene, 3, 0).0;
+            if whole_phases {
+                tracker.correct_whole_phases();
+            }
+            let start = drops(&ContourTracker::new(grid, &scene, 3, 0).0, 1);
+            let mut errors = Vec::new();
+            for s in 0..steps {
+                tracker.advance(&flow, s as f64, dt).expect("finite flow");
+                let now = drops(&tracker, 1);
+                errors.push([true, false].map(|side| {
+                    let find = |list: &[(f64, bool)]| {
+                        list.iter().find(|d| d.1 == side).expect("both drops").0
+                    };
+                    find(&now) / find(&start) - 1.0
+                }));
+            }
+            errors
+        };
+        let separate = run(false);
+        let whole = run(true);
+        let loss = 1.0 - (-3.0 * k * dt).exp();
+        for (s, [left, right]) in separate.iter().enumerate() {
+            // A step that leaves a component further than MISS_TOLERANCE from its target is
+            // retried with the miss added to its aim, so each drop ends every step within it.
+            assert!(
+                left.abs() < MISS_TOLERANCE && right.abs() < MISS_TOLERANCE,
+                "step {s}: left {left}, right {right}"
+            );
+        }
+        let [left, right] = whole[steps - 1];
+        // One pressure for both (equal) drops gives each half the loss back: the left one
+        // falls about half a loss per step behind, the right one gains as much; after five
+        // steps both are off by more than two losses (of the predicted 2.5; measured ±12.3 %).
+        assert!(
+            left < -2.0 * loss && right > 2.0 * loss,
+            "per phase: left {left}, right {right}"
+        );
+        let worst = separate[steps - 1]
+            .map(f64::abs)
+            .into_iter()
+            .fold(0.0, f64::max);
+        // Per component the drops end within contouring's error at rest (~1e-4, measured
+        // 2e-6 after five steps): a hundredth of the per-phase error is a wide margin.
+        assert!(
+            worst < 0.01 * left.abs().min(right),
+            "per component {worst}"
+        );
     }
 
     /// The carried loss is clamped, zero for uncorrected or vanished phases; the retry's aim
@@ -387,8 +637,12 @@ mod tests {
         assert_eq!(carried[1], 0.0, "uncorrected phase");
         assert_eq!(carried[2], 0.0, "vanished phase");
         assert_eq!(carried[3], MAX_CARRIED_FRACTION, "clamped");
-        assert!(missed(&aimed, &after, &targets));
-        assert!(!missed(&aimed, &[1.005, 0.5, 0.0, 0.995], &targets));
+        assert!(missed(&aimed, &after, &targets, 0.0));
+        assert!(
+            !missed(&aimed, &after, &targets, 0.5),
+            "misses below the floor"
+        );
+        assert!(!missed(&aimed, &[1.005, 0.5, 0.0, 0.995], &targets, 0.0));
         let mut aim = first_aim(&targets, &[0.05, 0.0, 0.0, 0.1]);
         reaim(&mut aim, &aimed, &after, &targets);
         assert!((aim[0] - 1.1).abs() < 1e-15, "moved by the 5 % miss");
