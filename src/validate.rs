@@ -7,6 +7,7 @@
 mod case;
 mod layered_flow;
 mod metrics;
+mod plot;
 
 use std::fmt::Write as _;
 use std::fs;
@@ -178,14 +179,34 @@ fn run_case(case: &Case, out: &Path, quick: bool) -> Result<Vec<Outcome>> {
         .map(serde_json::from_str::<Value>)
         .filter(|v| v.as_ref().map_or(true, |v| v.get("time").is_some()))
         .collect::<Result<_, _>>()?;
-    case.file
+    let outcomes: Vec<Outcome> = case
+        .file
         .metrics
         .iter()
         .map(|m| {
             evaluate(m, &frames, &scene, &case.dir, quick)
                 .with_context(|| format!("case '{}', metric '{}'", case.name, m.name))
         })
-        .collect()
+        .collect::<Result<_>>()?;
+    write_plots(&outcomes, &root.join("plots"))?;
+    Ok(outcomes)
+}
+
+/// Each metric's plot as `DIR/<metric>.svg` (the name's letters and digits, `_` for the rest).
+fn write_plots(outcomes: &[Outcome], dir: &Path) -> Result<()> {
+    for o in outcomes {
+        let Some(svg) = o.plot.as_ref().and_then(|p| p.svg()) else {
+            continue;
+        };
+        fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        let name: String = o
+            .metric
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .collect();
+        crate::output::write_atomic(&dir.join(format!("{name}.svg")), svg.as_bytes())?;
+    }
+    Ok(())
 }
 
 fn table(results: &[CaseResult]) -> String {

@@ -46,6 +46,20 @@ fn shipped_cases_pass_in_their_quick_versions() {
         assert!(!r["source"].as_str().unwrap().is_empty());
         assert!(r["ours"].is_f64() && r["tolerance"].is_f64(), "{r}");
     }
+    // Every metric that has a curve is plotted, ours beside its reference: a two-curve SVG.
+    for (case, plot, reference) in [
+        ("couette2", "u_profile__L____max_u", "exact layered flow"),
+        ("fall", "centroid_drop", "g t² / 2"),
+        ("rt_linear", "growth_rate_ln_a_a0__t", "exact linear theory"),
+        ("hydrostatic2", "spurious_speed__m_s_", "bound"),
+    ] {
+        let path = dir
+            .join("runs")
+            .join(format!("{case}-quick/plots/{plot}.svg"));
+        let svg = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        assert!(svg.contains(">polyphase</text>") && svg.contains(&format!(">{reference}</text>")));
+    }
 }
 
 #[test]

@@ -12,6 +12,7 @@ use serde_json::Value;
 
 use super::case::MetricSpec;
 use super::layered_flow::{Layer, LayeredFlow};
+use super::plot::{Plot, Series};
 
 /// One metric's result.
 #[derive(Clone, Debug)]
@@ -23,6 +24,29 @@ pub struct Outcome {
     pub error: f64,
     pub tolerance: f64,
     pub pass: bool,
+    /// Ours against the reference over the run (or along the profile).
+    pub plot: Option<Plot>,
+}
+
+/// A line of ours and the reference's line (or data points, `markers`).
+fn curves(
+    ours: Vec<(f64, f64)>,
+    reference_label: &str,
+    reference: Vec<(f64, f64)>,
+    markers: bool,
+) -> Vec<Series> {
+    vec![
+        Series {
+            label: "polyphase".into(),
+            points: ours,
+            markers: false,
+        },
+        Series {
+            label: reference_label.into(),
+            points: reference,
+            markers,
+        },
+    ]
 }
 
 /// Evaluates `spec` on the frames of a finished run of `scene`.
@@ -45,18 +69,40 @@ pub fn evaluate(
     };
     let (first, last) = (&frames[0], &frames[frames.len() - 1]);
     let t_end = number(last, "time")?;
+    let times: Vec<f64> = frames
+        .iter()
+        .map(|f| number(f, "time"))
+        .collect::<Result<_>>()?;
+    let over_time = |y: &str, series: Vec<Series>| Plot {
+        title: format!("{}: {}", scene.file.name, spec.name),
+        x: "t (s)".into(),
+        y: y.into(),
+        series,
+    };
+    let bound = |b: f64| vec![(times[0], b), (t_end, b)];
     let relative = |ours: f64, reference: f64| {
         let error = ours / reference - 1.0;
         (ours, reference, error, error.abs() <= tolerance)
     };
-    let (ours, reference, error, pass) = match spec.kind.as_str() {
+    let ((ours, reference, error, pass), plot) = match spec.kind.as_str() {
         "rt_linear_growth" => {
             let k = key()?;
             let amplitude = |f: &Value| -> Result<f64> {
                 Ok(0.5 * (number(f, &format!("{k}.max"))? - number(f, &format!("{k}.min"))?))
             };
-            let ours = (amplitude(last)? / amplitude(first)?).ln() / t_end;
-            relative(ours, rt_theory(spec, scene)?.ln() / t_end)
+            let a0 = amplitude(first)?;
+            let ours = (amplitude(last)? / a0).ln() / t_end;
+            let mut mine = Vec::new();
+            let mut theory = Vec::new();
+            for (f, &t) in frames.iter().zip(&times) {
+                mine.push((t, amplitude(f)? / a0));
+                theory.push((t, rt_theory(spec, scene, t)?));
+            }
+            let plot = over_time("a / a₀", curves(mine, "exact linear theory", theory, false));
+            (
+                relative(ours, rt_theory(spec, scene, t_end)?.ln() / t_end),
+                Some(plot),
+            )
         }
         "free_fall" => {
             let k = key()?;
@@ -66,26 +112,47 @@ pub fn evaluate(
                 let c = |a: usize| number(f, &format!("{k}.0.centroid.{a}"));
                 Ok(glam::DVec3::new(c(0)?, c(1)?, c(2)?))
             };
-            let drop = (centroid(last)? - centroid(first)?).dot(down);
-            relative(drop, 0.5 * g.length() * t_end * t_end)
+            let start = centroid(first)?;
+            let drop = (centroid(last)? - start).dot(down);
+            let mut mine = Vec::new();
+            for (f, &t) in frames.iter().zip(&times) {
+                mine.push((t, (centroid(f)? - start).dot(down)));
+            }
+            let exact = times
+                .iter()
+                .map(|&t| (t, 0.5 * g.length() * t * t))
+                .collect();
+            let plot = over_time("centroid drop (m)", curves(mine, "g t² / 2", exact, false));
+            (relative(drop, 0.5 * g.length() * t_end * t_end), Some(plot))
         }
         "roundness" => {
             let k = key()?;
             let mut worst: f64 = 0.0;
-            for f in frames {
+            let mut mine = Vec::new();
+            for (f, &t) in frames.iter().zip(&times) {
                 let near = number(f, &format!("{k}.0.nearest"))?;
                 let far = number(f, &format!("{k}.0.farthest"))?;
-                worst = worst.max((1.0 - near).abs()).max((far - 1.0).abs());
+                let here = (1.0 - near).abs().max((far - 1.0).abs());
+                mine.push((t, here));
+                worst = worst.max(here);
             }
-            (worst, 0.0, worst, worst <= tolerance)
+            let plot = over_time(
+                "|1 − r / r_eq|, worst",
+                curves(mine, "tolerance", bound(tolerance), false),
+            );
+            ((worst, 0.0, worst, worst <= tolerance), Some(plot))
         }
         "max_value" => {
             let k = key()?;
             let mut worst = f64::NEG_INFINITY;
-            for f in &frames[1..] {
-                worst = worst.max(number(f, k)?);
+            let mut mine = Vec::new();
+            for (f, &t) in frames[1..].iter().zip(&times[1..]) {
+                let v = number(f, k)?;
+                mine.push((t, v));
+                worst = worst.max(v);
             }
-            (worst, tolerance, worst, worst <= tolerance)
+            let plot = over_time(k, curves(mine, "bound", bound(tolerance), false));
+            ((worst, tolerance, worst, worst <= tolerance), Some(plot))
         }
         "series" => {
             let k = key()?;
@@ -94,13 +161,9 @@ pub fn evaluate(
                 .as_deref()
                 .with_context(|| format!("metric '{}' (series) needs `reference`", spec.name))?;
             let rows = read_series(&case_dir.join(file))?;
-            let times: Vec<f64> = frames
-                .iter()
-                .map(|f| number(f, "time"))
-                .collect::<Result<_>>()?;
             let values: Vec<f64> = frames.iter().map(|f| number(f, k)).collect::<Result<_>>()?;
             let mut worst: Option<(f64, f64, f64)> = None;
-            for (t, r) in rows {
+            for &(t, r) in &rows {
                 let Some(o) = interpolate(&times, &values, t) else {
                     continue;
                 };
@@ -111,12 +174,14 @@ pub fn evaluate(
             }
             let (o, r, e) =
                 worst.with_context(|| format!("{file}: no reference time inside the run"))?;
-            (o, r, e, e.abs() <= tolerance)
+            let mine = times.iter().copied().zip(values.iter().copied()).collect();
+            let plot = over_time(k, curves(mine, file, rows, true));
+            ((o, r, e, e.abs() <= tolerance), Some(plot))
         }
         "profile" => {
             let k = key()?;
-            let (ours, reference, error) = profile_error(spec, k, last, scene)?;
-            (ours, reference, error, error <= tolerance)
+            let (ours, reference, error, plot) = profile_error(spec, k, last, scene)?;
+            ((ours, reference, error, error <= tolerance), Some(plot))
         }
         other => bail!(
             "metric '{}': unknown kind '{other}' (kinds: rt_linear_growth, free_fall, roundness, \
@@ -131,12 +196,13 @@ pub fn evaluate(
         error,
         tolerance,
         pass: pass && ours.is_finite(),
+        plot,
     })
 }
 
-/// a(t)/a₀ of the exact linear theory from rest at the run's end time, for the metric's two
-/// phases; cosh(√(Agk) t) when either fluid is inviscid.
-fn rt_theory(spec: &MetricSpec, scene: &Scene) -> Result<f64> {
+/// a(t)/a₀ of the exact linear theory from rest at time `t` (1 at the start), for the
+/// metric's two phases; cosh(√(Agk) t) when either fluid is inviscid.
+fn rt_theory(spec: &MetricSpec, scene: &Scene, t: f64) -> Result<f64> {
     let [heavy, light] = spec
         .phases
         .as_ref()
@@ -159,7 +225,9 @@ fn rt_theory(spec: &MetricSpec, scene: &Scene) -> Result<f64> {
         heavy: props(heavy)?,
         light: props(light)?,
     };
-    let t = scene.file.time.end;
+    if t <= 0.0 {
+        return Ok(1.0);
+    }
     if rt.heavy.1 > 0.0 && rt.light.1 > 0.0 {
         Ok(rt.amplitude_ratio(t))
     } else {
@@ -176,7 +244,7 @@ fn profile_error(
     key: &str,
     last: &Value,
     scene: &Scene,
-) -> Result<(f64, f64, f64)> {
+) -> Result<(f64, f64, f64, Plot)> {
     let what = |field: &str| format!("metric '{}' (profile) needs `{field}`", spec.name);
     let names = spec.layers.as_deref().with_context(|| what("layers"))?;
     let interfaces = spec.interfaces.as_deref().unwrap_or_default();
@@ -263,10 +331,39 @@ fn profile_error(
                 .total_cmp(&(value[j] - exact[j]).abs())
         })
         .unwrap_or(0);
+    let dense = (0..=200)
+        .map(|i| {
+            let x = low + width * i as f64 / 200.0;
+            (x, flow.velocity(x - low))
+        })
+        .collect();
+    let axis_name = ["x", "y", "z"][axis];
+    let plot = Plot {
+        title: format!("{}: {}", scene.file.name, spec.name),
+        x: format!("{axis_name} (m)"),
+        y: format!("velocity {} (m/s)", ["u", "v", "w"][component]),
+        series: vec![
+            Series {
+                label: "exact layered flow".into(),
+                points: dense,
+                markers: false,
+            },
+            Series {
+                label: "polyphase".into(),
+                points: position
+                    .iter()
+                    .copied()
+                    .zip(value.iter().copied())
+                    .collect(),
+                markers: true,
+            },
+        ],
+    };
     Ok((
         value[worst],
         exact[worst],
         (value[worst] - exact[worst]).abs() / scale,
+        plot,
     ))
 }
 
@@ -387,12 +484,12 @@ mod tests {
             }
         };
         let (spec, scene, last) = couette(exact);
-        let (_, _, error) = profile_error(&spec, "u_profile", &last, &scene).unwrap();
+        let (_, _, error, _) = profile_error(&spec, "u_profile", &last, &scene).unwrap();
         assert!(error < 1e-12, "{error}");
         // The samples above y = 0.9 are 2e-4 m/s (2 % of the lid speed) off: the error is that
         // over the largest exact velocity, the top sample's.
         let (spec, scene, last) = couette(|y| exact(y) + if y > 0.9 { 2e-4 } else { 0.0 });
-        let (_, _, error) = profile_error(&spec, "u_profile", &last, &scene).unwrap();
+        let (_, _, error, _) = profile_error(&spec, "u_profile", &last, &scene).unwrap();
         let top = exact(31.5 / 32.0);
         assert!((error - 2e-4 / top).abs() < 1e-9, "{error}");
     }
