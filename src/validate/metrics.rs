@@ -178,6 +178,11 @@ pub fn evaluate(
             let plot = over_time(k, curves(mine, file, rows, true));
             ((o, r, e, e.abs() <= tolerance), Some(plot))
         }
+        "final_max" => {
+            let k = key()?;
+            let worst = final_max(last, k)?;
+            ((worst, tolerance, worst, worst <= tolerance), None)
+        }
         "profile" => {
             let k = key()?;
             let (ours, reference, error, plot) = profile_error(spec, k, last, scene)?;
@@ -185,7 +190,7 @@ pub fn evaluate(
         }
         other => bail!(
             "metric '{}': unknown kind '{other}' (kinds: rt_linear_growth, free_fall, roundness, \
-             max_value, series, profile)",
+             max_value, final_max, series, profile)",
             spec.name
         ),
     };
@@ -198,6 +203,29 @@ pub fn evaluate(
         pass: pass && ours.is_finite(),
         plot,
     })
+}
+
+/// The largest magnitude among the numbers at `key` of the last frame: the number itself, or
+/// the entries of an object such as `volume_error` {phase: relative error}.
+fn final_max(last: &Value, key: &str) -> Result<f64> {
+    let mut v = last;
+    for part in key.split('.') {
+        v = &v[part];
+    }
+    match v {
+        Value::Object(map) if !map.is_empty() => map
+            .iter()
+            .map(|(name, x)| {
+                x.as_f64()
+                    .map(f64::abs)
+                    .with_context(|| format!("stats '{key}.{name}' is not a number"))
+            })
+            .try_fold(0.0f64, |m, x| Ok(m.max(x?))),
+        _ => v
+            .as_f64()
+            .map(f64::abs)
+            .with_context(|| format!("the last frame's stats have no number at '{key}'")),
+    }
 }
 
 /// a(t)/a₀ of the exact linear theory from rest at time `t` (1 at the start), for the
@@ -509,6 +537,17 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("2 layers need 1 interfaces, got 0"), "{err}");
+    }
+
+    #[test]
+    fn final_max_takes_a_number_or_the_largest_entry() {
+        let last: Value = serde_json::from_str(
+            r#"{"hausdorff": {"over_h": 0.4}, "volume_error": {"a": -0.02, "b": 0.01}}"#,
+        )
+        .unwrap();
+        assert_eq!(final_max(&last, "hausdorff.over_h").unwrap(), 0.4);
+        assert_eq!(final_max(&last, "volume_error").unwrap(), 0.02);
+        assert!(final_max(&last, "missing").is_err());
     }
 
     #[test]
