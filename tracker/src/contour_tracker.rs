@@ -16,7 +16,9 @@ use crate::tracker::departure_point;
 use crate::tracker::{InterfaceTracker, StepStats, TrackerError};
 use crate::volume_correction::components::Components;
 use crate::volume_correction::succession::{share_targets, Succession};
-use crate::volume_correction::{carried_loss, first_aim, missed, reaim, VolumeShift, MAX_RETRIES};
+use crate::volume_correction::{
+    carried_loss, first_aim, missed, reaim, VolumeShift, MAX_RETRIES, MISS_TOLERANCE,
+};
 
 /// Tracker state: the current mesh, its exact query structure and the redistanced tree.
 pub struct ContourTracker {
@@ -317,8 +319,17 @@ impl InterfaceTracker for ContourTracker {
             more_stages.push(("succession", traced.elapsed().as_secs_f64()));
             let targets = &self.component_targets;
             let after = succession.pull_back(&found.volume, targets);
-            let floor = self.grid.h.powi(3);
-            if retries == MAX_RETRIES || !missed(shift.aimed(), &after, targets, floor) {
+            let cell = self.grid.h.powi(3);
+            let floors: Vec<f64> = self
+                .components
+                .phase
+                .iter()
+                .map(|&p| {
+                    let phase = phase_targets.get(p as usize).copied().unwrap_or(0.0);
+                    (MISS_TOLERANCE * phase).max(cell)
+                })
+                .collect();
+            if retries == MAX_RETRIES || !missed(shift.aimed(), &after, targets, &floors) {
                 let carried = carried_loss(shift.aimed(), &after, targets);
                 let inherited = succession.push_forward(targets, &found.volume);
                 let next = (
