@@ -310,23 +310,42 @@ pub struct StatusArgs {
     /// Wait until no task is queued or running, then show the table.
     #[arg(long)]
     pub wait: bool,
+    /// With `--wait`: give up after this many seconds (the table is shown, and the command
+    /// fails), e.g. for a task that a partition that is down will never start.
+    #[arg(long, value_name = "SECONDS", requires = "wait")]
+    pub timeout: Option<f64>,
 }
 
 /// Prints every task's state; fails when a task failed or was lost.
 pub fn status(args: &StatusArgs) -> Result<()> {
     let files = JobFiles::of(&args.dir);
     let job = files.read_job()?;
-    let rows = loop {
+    if let Some(t) = args.timeout {
+        if !(t.is_finite() && t >= 0.0) {
+            bail!("--timeout {t}: expected a number of seconds, at least 0");
+        }
+    }
+    let start = Instant::now();
+    let (rows, busy) = loop {
         let rows = task_rows(&job, &files);
         let busy = rows
             .iter()
             .any(|r| matches!(r.state, State::Pending | State::Running));
-        if !(args.wait && busy) {
-            break rows;
+        let out_of_time = args
+            .timeout
+            .is_some_and(|t| start.elapsed().as_secs_f64() >= t);
+        if !(args.wait && busy) || out_of_time {
+            break (rows, busy);
         }
         std::thread::sleep(Duration::from_secs(2));
     };
     print!("{}", table(&job, &rows));
+    if args.wait && busy {
+        bail!(
+            "tasks still queued or running after {} s (--timeout)",
+            args.timeout.unwrap_or(0.0)
+        );
+    }
     let bad = rows.iter().filter(|r| r.state == State::Failed).count();
     if bad > 0 {
         bail!("{bad} of {} task(s) failed", rows.len());

@@ -147,6 +147,15 @@ impl Cluster {
         String::from_utf8_lossy(&o.stdout).into_owned()
     }
 
+    /// `polyphase` with this cluster's configuration, whatever its exit status.
+    fn command_polyphase(&self, args: &[&str]) -> Output {
+        Command::new(env!("CARGO_BIN_EXE_polyphase"))
+            .args(args)
+            .env("SLURM_CONF", &self.conf)
+            .output()
+            .expect("polyphase runs")
+    }
+
     /// `polyphase status DIR --wait`, killed (and the test failed) after `limit`.
     fn wait(&self, dir: &Path, limit: Duration) -> Output {
         let mut child = Command::new(env!("CARGO_BIN_EXE_polyphase"))
@@ -387,4 +396,34 @@ fn wedge_and_render_farmed_on_slurm_match_local_runs() {
         failed.contains("failed") && failed.contains("scene.toml"),
         "{failed}"
     );
+
+    // A job whose partition is down never starts: `--wait --timeout` gives up, shows it
+    // pending and fails.
+    let down = cluster.command("scontrol", &["update", "PartitionName=local", "State=DOWN"]);
+    assert!(
+        down.status.success(),
+        "{}",
+        String::from_utf8_lossy(&down.stderr)
+    );
+    cluster.polyphase(&root, &["submit", "wedge", "wedge"]);
+    let id = job_id(&wedge);
+    let o = cluster.command_polyphase(&[
+        "status",
+        wedge.to_str().unwrap(),
+        "--wait",
+        "--timeout",
+        "3",
+    ]);
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(!o.status.success() && table.contains("pending"), "{table}");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--timeout"));
+    cluster.command("scancel", &[&id]);
+}
+
+/// The job id `polyphase submit` recorded for a farmed folder.
+fn job_id(dir: &Path) -> String {
+    let job: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(dir.join("slurm/job.json")).expect("job.json"))
+            .expect("JSON");
+    job["job_id"].as_str().expect("a job id").to_string()
 }
