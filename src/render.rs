@@ -83,9 +83,7 @@ impl RenderArgs {
             python: None,
         }
     }
-}
 
-impl RenderArgs {
     /// The `polyphase render …` command line (without the program name) for these options.
     pub fn to_cli(&self) -> Vec<String> {
         let mut args = vec![

@@ -57,9 +57,9 @@ pub fn wedge(args: &WedgeArgs) -> Result<()> {
     for k in 0..count {
         let name = format!("{}-{k}", base.file.name);
         let picks = combination(k, &axes);
-        let (scene, settings) = variant(&doc, &name, &axes, &picks)?;
+        let (scene, v) = variant(&doc, &name, &axes, &picks)?;
         texts.push(scene.to_toml());
-        variants.push(Variant { name, settings });
+        variants.push(v);
     }
     let index = WedgeIndex {
         scene: args.scene.clone(),
@@ -98,12 +98,7 @@ fn combination(mut k: usize, axes: &[SetAxis]) -> Vec<usize> {
 }
 
 /// One variant: the base document with its values written in, named `name`, validated.
-fn variant(
-    doc: &Value,
-    name: &str,
-    axes: &[SetAxis],
-    picks: &[usize],
-) -> Result<(Scene, Vec<Setting>)> {
+fn variant(doc: &Value, name: &str, axes: &[SetAxis], picks: &[usize]) -> Result<(Scene, Variant)> {
     let mut doc = doc.clone();
     set_path(&mut doc, "name", Value::String(name.to_string()))?;
     let mut resolution = None;
@@ -123,12 +118,11 @@ fn variant(
             set_path(&mut doc, &axis.path, value).with_context(|| format!("--set {}", axis.arg))?;
         }
     }
-    let label = settings
-        .iter()
-        .map(|s| format!("{}={}", s.path, s.value))
-        .collect::<Vec<_>>()
-        .join(", ");
-    let origin = format!("variant {name} ({label})");
+    let variant = Variant {
+        name: name.to_string(),
+        settings,
+    };
+    let origin = format!("variant {name} ({})", variant.label(", "));
     let file: SceneFile = doc
         .try_into()
         .map_err(|e: toml::de::Error| anyhow!("{origin}: {}", e.message()))?;
@@ -139,7 +133,7 @@ fn variant(
             .with_context(|| format!("{origin}: resolution {r}"))?,
         None => scene,
     };
-    Ok((scene, settings))
+    Ok((scene, variant))
 }
 
 /// A TOML value as JSON (for the index).

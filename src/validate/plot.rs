@@ -125,7 +125,8 @@ impl Plot {
     }
 }
 
-/// The range of `values` widened by 5 % on each side (a flat range by ±1 or ±5 %).
+/// The range of `values` widened by 5 % of its span on each side; a flat range (one value v)
+/// by 1 % of max(|v|, 1).
 fn padded(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
         (a.min(v), b.max(v))

@@ -61,7 +61,22 @@ impl ContourTracker {
     ) -> (ContourTracker, StepStats) {
         let (tree, mesh, query, stats) = rebuild(&grid, initial, background);
         let volume_targets = Some(mesh.phase_volumes(n_phases));
-        let mut tracker = ContourTracker {
+        let mut tracker = ContourTracker::assemble(grid, n_phases, background, tree, mesh, query);
+        tracker.set_volume_targets(volume_targets);
+        (tracker, stats)
+    }
+
+    /// A tracker over a built mesh and tree, without volume targets yet, travelling the default
+    /// distance per step.
+    fn assemble(
+        grid: GridSpec,
+        n_phases: usize,
+        background: PhaseId,
+        tree: MdTree,
+        mesh: LabeledMesh,
+        query: MeshQuery,
+    ) -> ContourTracker {
+        ContourTracker {
             grid,
             n_phases,
             background,
@@ -74,9 +89,7 @@ impl ContourTracker {
             carried_loss: Vec::new(),
             find_components: Components::find,
             max_travel: DEFAULT_TRAVEL_CELLS * grid.h,
-        };
-        tracker.set_volume_targets(volume_targets);
-        (tracker, stats)
+        }
     }
 
     /// A tracker from the saved state of another (a checkpoint): its mesh, its redistanced
@@ -97,20 +110,7 @@ impl ContourTracker {
         carried_loss: Vec<f64>,
     ) -> ContourTracker {
         let query = MeshQuery::new(&mesh, background);
-        let mut tracker = ContourTracker {
-            grid,
-            n_phases,
-            background,
-            tree,
-            mesh,
-            query,
-            volume_targets: None,
-            components: Components::default(),
-            component_targets: Vec::new(),
-            carried_loss: Vec::new(),
-            find_components: Components::find,
-            max_travel: DEFAULT_TRAVEL_CELLS * grid.h,
-        };
+        let mut tracker = ContourTracker::assemble(grid, n_phases, background, tree, mesh, query);
         tracker.set_volume_targets(volume_targets);
         let n = tracker.components.len();
         if tracker.volume_targets.is_some()
