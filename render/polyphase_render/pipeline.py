@@ -57,31 +57,18 @@ def run(opts: Options, log) -> int:
     present, missing = frames_mod.select(found, opts.frames, expected_last)
     bad = [(f"frames/{n:04d}.ply", "missing") for n in missing]
 
-    # Read every frame on disk once up front: validates the selected ones, and frames the
-    # camera (and sizes the absorption) on all of them, so a frame rendered alone (a farmed
+    # The selected frames are read once up front to validate them; the camera is framed (and
+    # the absorption sized) on every frame of the run, so a frame rendered alone (a farmed
     # frame range) is the same image as in a render of the whole run.
-    good, lo, hi, liquid = [], None, None, None
-    from .build import content_box
-    from .geometry import phase_volumes
-
-    selected = set(present)
-    for n in sorted(found):
+    good = []
+    for n in present:
         try:
-            mesh = read_ply(found[n])
+            read_ply(found[n])
         except PlyError as e:
-            if n in selected:
-                bad.append((f"frames/{n:04d}.ply", str(e)))
+            bad.append((f"frames/{n:04d}.ply", str(e)))
             continue
-        if n in selected:
-            good.append(n)
-        if liquid is None:
-            vols = [v for i, v in enumerate(phase_volumes(mesh, len(scene.phases)))
-                    if i != scene.background and i not in scene.opaque_ids() and v > 0]
-            liquid = float(np.mean(vols)) if vols else None
-        clo, chi = content_box(mesh, scene)
-        if clo is not None:
-            lo = clo if lo is None else np.minimum(lo, clo)
-            hi = chi if hi is None else np.maximum(hi, chi)
+        good.append(n)
+    lo, hi, liquid = _framing(root, scene_path, scene, found)
     if not good:
         msg = "no frame could be read"
         raise RunFolderError(f"{msg}: {_bad_text(bad)}" if bad else f"{msg}: {root}/frames has no NNNN.ply")
@@ -163,6 +150,57 @@ def run(opts: Options, log) -> int:
         log(f"error: {len(bad)} frame(s) not rendered: {_bad_text(sorted(bad))}")
         return 1
     return 0
+
+
+def _framing(root, scene_path, scene, found):
+    """(lo, hi, liquid): the box of every frame's liquids and the mean liquid phase volume of
+    the first readable frame. Reading every frame costs each task of a farmed render as much
+    as the whole run, so the result is kept in `DIR/render/framing.json`, keyed by the size
+    and modification time of `scene.toml` and of every frame (any rewrite recomputes it)."""
+    import json
+
+    from .build import content_box
+    from .geometry import phase_volumes
+
+    def stamp(path):
+        st = os.stat(path)
+        return [st.st_size, st.st_mtime_ns]
+
+    key = [stamp(scene_path)] + [[n] + stamp(found[n]) for n in sorted(found)]
+    cache = os.path.join(root, "render", "framing.json")
+    try:
+        with open(cache) as f:
+            kept = json.load(f)
+        if kept["key"] == key:
+            box = [None if v is None else np.array(v) for v in (kept["lo"], kept["hi"])]
+            return box[0], box[1], kept["liquid"]
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    lo, hi, liquid = None, None, None
+    for n in sorted(found):
+        try:
+            mesh = read_ply(found[n])
+        except PlyError:
+            continue
+        if liquid is None:
+            vols = [v for i, v in enumerate(phase_volumes(mesh, len(scene.phases)))
+                    if i != scene.background and i not in scene.opaque_ids() and v > 0]
+            liquid = float(np.mean(vols)) if vols else None
+        clo, chi = content_box(mesh, scene)
+        if clo is not None:
+            lo = clo if lo is None else np.minimum(lo, clo)
+            hi = chi if hi is None else np.maximum(hi, chi)
+    kept = {"key": key, "liquid": liquid,
+            "lo": None if lo is None else lo.tolist(), "hi": None if hi is None else hi.tolist()}
+    try:
+        os.makedirs(os.path.dirname(cache), exist_ok=True)
+        tmp = cache + ".tmp" + str(os.getpid())
+        with open(tmp, "w") as f:
+            json.dump(kept, f)
+        os.replace(tmp, cache)
+    except OSError:
+        pass  # an unwritable cache only costs the next render the reading
+    return lo, hi, liquid
 
 
 def _expected_last(scene_path):
