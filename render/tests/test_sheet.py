@@ -28,7 +28,8 @@ class SheetTest(unittest.TestCase):
         # (the missing tile's label has a second one), below a one-line title.
         band, top = label_px(2), label_px(1) + 6
         self.assertEqual(sheet.shape[:2], (top + 2 * (40 + band), 2 * 60))
-        # The centre of each tile is its image's colour (a solid tile, nearest-neighbour).
+        # The centre of each tile is its image's colour (a solid tile, drawn nearest-neighbour
+        # at its own size): 0.02 allows the 8-bit PNG round trip (1/255) with margin.
         for k, c in enumerate(colours):
             r, col = divmod(k, 2)
             y = top + r * (40 + band) + band + 20
