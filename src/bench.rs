@@ -72,7 +72,7 @@ pub enum BenchCommand {
 
 /// One row of the contour benchmark.
 #[derive(Serialize)]
-struct ContourRow {
+pub(crate) struct ContourRow {
     res: i64,
     cells: usize,
     interface_cells: usize,
@@ -81,8 +81,8 @@ struct ContourRow {
     contour_s: f64,
     redistance_s: f64,
     total_s: f64,
-    indicator_accuracy: f64,
-    max_mismatch_over_h: f64,
+    pub(crate) indicator_accuracy: f64,
+    pub(crate) max_mismatch_over_h: f64,
 }
 
 pub fn bench(cmd: BenchCommand) -> Result<()> {
@@ -128,7 +128,9 @@ pub fn bench(cmd: BenchCommand) -> Result<()> {
     }
 }
 
-fn contour_row(scene: &polyphase_scenes::Scene, samples: usize) -> ContourRow {
+/// The first step of the contouring tracker from the scene's exact shapes: its stage timings,
+/// and its indicator against the exact one at `samples` random points (paper 004 Table 2).
+pub(crate) fn contour_row(scene: &polyphase_scenes::Scene, samples: usize) -> ContourRow {
     let n_phases = scene.file.phases.len();
     let exact = |x| scene.initial.sample(x);
     let (tracker, stats) =

@@ -1,12 +1,11 @@
 """Plots of a run's `stats.jsonl` as PNG (issue 5, "plots"): per-phase volume and its drift
 against time, and every other numeric series the scene measures (surge front, bubble and spike
-heights, …) against time, plus the time per frame of each stage."""
+heights, …) against time, plus the time per frame of each stage. Comparisons with experiments
+are `polyphase validate`'s (it knows each case's scaling and reference)."""
 
 import json
 import math
 import os
-
-from .experiments import MARTIN_MOYCE_N2, surge_front_dimensionless
 
 #: Keys every frame line has; everything else numeric is a scene measurement.
 STANDARD = {"frame", "time", "steps", "phase_volumes", "timings", "mesh", "cells", "interface_cells",
@@ -74,23 +73,6 @@ def _colors(scene):
     return {p.name: tuple(min(max(c, 0.0), 1.0) ** (1 / 2.2) for c in p.color) for p in scene.phases} if scene else {}
 
 
-def _surge_front(times, fronts, out_dir, plt):
-    """The surge front scaled like Martin & Moyce (1952), with their measured points."""
-    t, z = surge_front_dimensionless(times, fronts)
-    fig, ax = plt.subplots(figsize=(6, 4.2))
-    ax.plot(t, z, marker="o", ms=3, label="polyphase")
-    et, ez = zip(*MARTIN_MOYCE_N2)
-    ax.plot(et, ez, "s", ms=5, mfc="none", color="black", label="Martin & Moyce 1952, n² = 2")
-    ax.set(xlabel="T = t·√(g/a)", ylabel="Z = front / a", title="Surge front of a collapsing column")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    path = os.path.join(out_dir, "surge_front.png")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
-
-
 def plot_all(stats_path, out_dir, scene=None) -> list:
     """Writes the plots into `out_dir`; returns their paths."""
     import matplotlib
@@ -148,9 +130,6 @@ def plot_all(stats_path, out_dir, scene=None) -> list:
         fig.savefig(path, dpi=110)
         plt.close(fig)
         written.append(path)
-
-    if "surge_front" in series:
-        written.append(_surge_front(*series["surge_front"], out_dir, plt))
 
     stages = sorted({s for o in lines for s, v in o.get("timings", {}).items() if _number(v)})
     if stages and len(lines) >= 2:

@@ -1,7 +1,6 @@
 """Outputs that need no renderer run: tone mapping, plots, `.vol` export, progress text."""
 
 import io
-import math
 import os
 import tempfile
 import unittest
@@ -9,7 +8,6 @@ import unittest
 import numpy as np
 
 from polyphase_render.image import tonemap
-from polyphase_render.experiments import MARTIN_MOYCE_N2, interpolate, surge_front_dimensionless
 from polyphase_render.plots import measurements, plot_all, read_stats
 from polyphase_render.progress import Progress
 from polyphase_render.scene import load_scene
@@ -44,26 +42,10 @@ class PlotTest(unittest.TestCase):
             written = plot_all(os.path.join(root, "stats.jsonl"), os.path.join(root, "plots"),
                                load_scene(os.path.join(root, "scene.toml")))
             names = sorted(os.path.basename(p) for p in written)
-            self.assertEqual(names, ["measurements.png", "surge_front.png", "timings.png", "volumes.png"])
+            self.assertEqual(names, ["measurements.png", "timings.png", "volumes.png"])
             for p in written:
                 with open(p, "rb") as f:
                     self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
-
-
-class ExperimentTest(unittest.TestCase):
-    def test_surge_front_scaling(self):
-        # A front at 2a after t = sqrt(a/g) is the point (T, Z) = (1, 2), whatever a is.
-        for a in (0.05, 0.1):
-            t, z = surge_front_dimensionless([0.0, math.sqrt(a / 9.81)], [a, 2 * a])
-            self.assertAlmostEqual(t[1], 1.0, places=12)
-            self.assertEqual(z, [1.0, 2.0])
-
-    def test_martin_moyce_points_are_a_rising_front(self):
-        t, z = zip(*MARTIN_MOYCE_N2)
-        self.assertTrue(all(b > a for a, b in zip(t, t[1:])))
-        self.assertTrue(all(b > a for a, b in zip(z, z[1:])))
-        self.assertEqual(interpolate(t, z, 0.43), 1.11)
-        self.assertIsNone(interpolate(t, z, 5.0))
 
 
 class VolTest(unittest.TestCase):
