@@ -3,6 +3,7 @@
 
 pub mod contour;
 pub mod contour_tracker;
+pub mod curvature;
 pub mod front;
 pub mod invariants;
 pub mod mesh;
@@ -17,6 +18,7 @@ pub mod volume_correction;
 
 pub use contour::{MdTree, PhaseSampler};
 pub use contour_tracker::ContourTracker;
+pub use curvature::CurvatureSampler;
 pub use invariants::InvariantError;
 pub use mesh::LabeledMesh;
 pub use ply::{read_ply, write_ply, PlyError};
