@@ -46,6 +46,19 @@ pub struct SceneFile {
     /// Measurements of the interface written to `stats.jsonl` every frame (`[[measure]]`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub measure: Vec<MeasureSpec>,
+    /// Surface tension per pair of phases (`[[tension]]`); pairs not listed have none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tension: Vec<TensionSpec>,
+}
+
+/// The surface tension between two phases: `phases = ["water", "air"], sigma = 0.0728`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TensionSpec {
+    /// The two phases the interface separates, by name.
+    pub phases: [String; 2],
+    /// Surface tension coefficient σ (N/m), ≥ 0.
+    pub sigma: f64,
 }
 
 /// One measurement as written: `kind` selects which of the optional fields are required.
@@ -55,7 +68,9 @@ pub struct SceneFile {
 /// piece of the phase with its volume, centroid and roundness; `rise_velocity` (phase, coupled
 /// scenes): the mean velocity of the phase's solver cells against gravity; `velocity_profile`
 /// (component, axis, coupled scenes): the fluid's velocity component along each layer of
-/// solver cells across `axis` (a shear flow's profile).
+/// solver cells across `axis` (a shear flow's profile); `pressure_jump` (phases = [inside,
+/// outside], coupled scenes): the mean pressure of the inside phase's solver cells minus the
+/// outside phase's (a static drop's Laplace jump).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeasureSpec {
@@ -391,8 +406,8 @@ fn default_ior() -> f64 {
 pub struct ShapeSpec {
     /// Phase name the shape is filled with.
     pub phase: String,
-    /// `sphere` (center, radius), `cylinder` (center, radius; axis parallel to z), `box`
-    /// (lo, hi), `half_space` (point, normal: the phase is on the side the normal points
+    /// `sphere` (center, radius), `cylinder` (center, radius; axis parallel to z), `ellipsoid`
+    /// (center, radii), `box` (lo, hi), `half_space` (point, normal: the phase is on the side the normal points
     /// away from), `wave` (a half-space whose plane is displaced by amplitude·cos(2π(x −
     /// point.x)/wavelength) along the normal) or `mesh` (the inside of a closed triangle mesh
     /// read from the OBJ `file`, then scaled by `scale` and moved by `translate`).
@@ -405,6 +420,9 @@ pub struct ShapeSpec {
     pub center: Option<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radius: Option<f64>,
+    /// `ellipsoid`: the three semi-axes along x, y, z (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radii: Option<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lo: Option<[f64; 3]>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -13,16 +13,18 @@ pub mod obj;
 pub mod overlap;
 pub mod scene;
 pub mod shapes;
+pub mod tension;
 pub mod velocity;
 pub mod volume;
 
 pub use builtin::{builtin, load, BUILTIN, DEFAULT_SCENE};
 pub use error::SceneError;
 pub use format::{
-    BoundaryKind, BoundarySpec, PreconditionerSpec, SceneFile, SolverSpec, TrackerKind,
-    TrackerSpec, WALLS,
+    BoundaryKind, BoundarySpec, PreconditionerSpec, SceneFile, SolverSpec, TensionSpec,
+    TrackerKind, TrackerSpec, WALLS,
 };
 pub use measure::{Measure, MeasureKind};
 pub use scene::Scene;
 pub use shapes::InitialPhases;
+pub use tension::Tension;
 pub use velocity::AnalyticVelocity;

@@ -27,6 +27,9 @@ pub enum MeasureKind {
     /// `axis`, with the layers' centres: a shear flow's profile (two-layer Couette and
     /// Poiseuille validation). Coupled scenes only.
     VelocityProfile { component: usize, axis: usize },
+    /// The mean pressure of the solver cells of `inside` minus that of the cells of
+    /// `outside`: a static drop's Laplace jump. Coupled scenes only.
+    PressureJump { inside: PhaseId, outside: PhaseId },
 }
 
 /// A validated measurement with its stats key.
@@ -75,6 +78,26 @@ pub fn compile_measures(
             })
         };
         let axis = || named_axis(spec.axis.as_deref(), "axis");
+        let two_phases = || -> Result<(PhaseId, PhaseId, &str, &str), SceneError> {
+            let pair = spec.phases.as_deref().unwrap_or_default();
+            let [a, b] = pair else {
+                return Err(bad(
+                    &place,
+                    format!(
+                        "kind '{}' needs the field 'phases' with two phase names",
+                        spec.kind
+                    ),
+                ));
+            };
+            let (ia, ib) = (phase_id(a, "phases")?, phase_id(b, "phases")?);
+            if ia == ib {
+                return Err(bad(
+                    &format!("{place}.phases"),
+                    format!("needs two different phases, got '{a}' twice"),
+                ));
+            }
+            Ok((ia, ib, a, b))
+        };
         let coupled_only = |what: &str| -> Result<(), SceneError> {
             if coupled {
                 Ok(())
@@ -82,7 +105,7 @@ pub fn compile_measures(
                 Err(bad(
                     &format!("{place}.kind"),
                     format!(
-                        "'{what}' reads the fluid's velocity: it needs a coupled scene \
+                        "'{what}' reads the fluid: it needs a coupled scene \
                          (velocity.field = \"fluid\")"
                     ),
                 ))
@@ -98,20 +121,7 @@ pub fn compile_measures(
                 )
             }
             "tips" => {
-                let pair = spec.phases.as_deref().unwrap_or_default();
-                let [a, b] = pair else {
-                    return Err(bad(
-                        &place,
-                        "kind 'tips' needs the field 'phases' with two phase names".into(),
-                    ));
-                };
-                let (ia, ib) = (phase_id(a, "phases")?, phase_id(b, "phases")?);
-                if ia == ib {
-                    return Err(bad(
-                        &format!("{place}.phases"),
-                        format!("needs two different phases, got '{a}' twice"),
-                    ));
-                }
+                let (ia, ib, a, b) = two_phases()?;
                 let axis = axis()?;
                 (
                     MeasureKind::Tips { a: ia, b: ib, axis },
@@ -143,12 +153,20 @@ pub fn compile_measures(
                     format!("velocity_profile_{}_{}", AXES[component], AXES[axis]),
                 )
             }
+            "pressure_jump" => {
+                coupled_only("pressure_jump")?;
+                let (inside, outside, a, b) = two_phases()?;
+                (
+                    MeasureKind::PressureJump { inside, outside },
+                    format!("pressure_jump_{a}_{b}"),
+                )
+            }
             other => {
                 return Err(bad(
                     &format!("{place}.kind"),
                     format!(
                         "unknown kind '{other}' (kinds: front, tips, centroid, pieces, \
-                         rise_velocity, velocity_profile)"
+                         rise_velocity, velocity_profile, pressure_jump)"
                     ),
                 ))
             }

@@ -25,6 +25,11 @@ pub enum Primitive {
         lo: DVec3,
         hi: DVec3,
     },
+    /// Axis-aligned ellipsoid; a very long z radius makes an ellipse of a slab scene.
+    Ellipsoid {
+        center: DVec3,
+        radii: DVec3,
+    },
     /// Keeps the side `normal` (unit) points away from.
     HalfSpace {
         point: DVec3,
@@ -43,7 +48,8 @@ pub enum Primitive {
 }
 
 impl Primitive {
-    /// Exact signed distance to the primitive's surface.
+    /// Signed distance to the primitive's surface: exact, or for `Ellipsoid` and `Wave` a bound
+    /// whose magnitude never exceeds the distance.
     pub fn sdf(&self, x: DVec3) -> f64 {
         match *self {
             Primitive::Sphere { center, radius } => (x - center).length() - radius,
@@ -54,6 +60,12 @@ impl Primitive {
                 let c = (lo + hi) * 0.5;
                 let q = (x - c).abs() - (hi - lo) * 0.5;
                 q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
+            }
+            // g = ‖(x − c)/r‖ changes by at most 1/r_min per metre, and g = 1 on the surface,
+            // so (g − 1)·r_min never exceeds the distance (a bound, as the CSG of `Shape`), with
+            // the exact sign.
+            Primitive::Ellipsoid { center, radii } => {
+                (((x - center) / radii).length() - 1.0) * radii.min_element()
             }
             Primitive::HalfSpace { point, normal } => (x - point).dot(normal),
             // Divided by √(1 + max slope²) so |sdf| never exceeds the true distance.
