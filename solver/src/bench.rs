@@ -125,7 +125,7 @@ pub fn run_selected(
             if pressure_solves {
                 let mut v = vel.clone();
                 let t = Instant::now();
-                let out = pressure::project(&mut v, &open, &rho, dt, &settings)?;
+                let out = pressure::project(&mut v, &open, &rho, dt, &settings, None)?;
                 rows.push(BenchRow {
                     res,
                     solve: "pressure",

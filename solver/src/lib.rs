@@ -13,6 +13,7 @@ mod config;
 mod error;
 mod extension;
 mod interp;
+mod jump;
 mod layout;
 mod linalg;
 mod mac;
@@ -28,6 +29,7 @@ pub use config::{
     SolverConfig, Wall,
 };
 pub use error::SolverError;
+pub use jump::{InterfaceFace, PressureJumps};
 pub use linalg::pcg::SolveStats;
 pub use mac::MacGrid;
 pub use phase::PhaseProps;

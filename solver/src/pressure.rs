@@ -190,13 +190,15 @@ pub(crate) struct Projected {
     pub memory_bytes: usize,
 }
 
-/// Makes `vel` discretely divergence-free (in place).
+/// Makes `vel` discretely divergence-free (in place), with the pressure jumping by `jumps`
+/// (Pa, p_above − p_below, per face; see `jump.rs`) across interface faces.
 pub(crate) fn project(
     vel: &mut MacGrid,
     open: &[Vec<f64>; 3],
     rho_face: &[Vec<f64>; 3],
     dt: f64,
     settings: &LinearSolverSettings,
+    jumps: Option<&[Vec<f64>; 3]>,
 ) -> Result<Projected, SolverError> {
     let layout = vel.layout;
     let h = vel.spec.h;
@@ -205,6 +207,22 @@ pub(crate) fn project(
         .into_par_iter()
         .map(|d| -d * h)
         .collect();
+    // In q = p·dt/h a jump J is ĵ = J·dt/h, and a face's flux (q_above − q_below − ĵ)·β: each
+    // cell's zero-net-outflow row gains −β·ĵ for its upper faces and +β·ĵ for its lower ones.
+    let scale = dt / h;
+    if let Some(j) = jumps {
+        let [nx, ny, _] = layout.n;
+        b.par_chunks_mut(nx).enumerate().for_each(|(row, bs)| {
+            let (jy, k) = (row % ny, row / ny);
+            for (i, bi) in bs.iter_mut().enumerate() {
+                for (d, (lo, up)) in cell_faces(&layout, [i, jy, k]).into_iter().enumerate() {
+                    *bi += scale
+                        * (beta(open, rho_face, d, lo) * j[d][lo]
+                            - beta(open, rho_face, d, up) * j[d][up]);
+                }
+            }
+        });
+    }
     make_consistent(&a, &mut b);
     let mut q = vec![0.0; layout.cells()];
     let (stats, pre_mem) = solve_stencil(&a, &b, &mut q, settings, "pressure")?;
@@ -225,7 +243,8 @@ pub(crate) fn project(
                 pl[d] = lo;
                 let mut ph = p;
                 ph[d] = hi;
-                *u -= (q[idx(layout.n, ph)] - q[idx(layout.n, pl)]) / rho_face[d][f];
+                let jump = jumps.map_or(0.0, |j| scale * j[d][f]);
+                *u -= (q[idx(layout.n, ph)] - q[idx(layout.n, pl)] - jump) / rho_face[d][f];
             }
         });
     }

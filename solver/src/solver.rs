@@ -8,6 +8,7 @@ use crate::error::SolverError;
 use crate::extension::{
     all_face_owners, all_seed_phases, carries, extend, owning_phases, UNREACHED,
 };
+use crate::jump::{InterfaceFace, PressureJumps};
 use crate::layout::{idx, unidx, Layout};
 use crate::linalg::pcg::SolveStats;
 use crate::linalg::vecops::first_non_finite;
@@ -311,7 +312,36 @@ impl Solver {
         phases: &[PhaseProps],
         dt: f64,
     ) -> Result<StepReport, SolverError> {
-        self.step_inner(field, phases, dt, None)
+        self.step_inner(field, phases, dt, None, None)
+    }
+
+    /// Advances by `dt` with gravity, the pressure jumping by `jumps` across interface faces
+    /// (surface tension's Laplace jump; see [`PressureJumps`]).
+    pub fn step_with_jumps(
+        &mut self,
+        field: &PhaseField,
+        phases: &[PhaseProps],
+        dt: f64,
+        jumps: &PressureJumps,
+    ) -> Result<StepReport, SolverError> {
+        self.step_inner(field, phases, dt, None, Some(jumps))
+    }
+
+    /// The faces between cells of different phases in `field`, with where the interface
+    /// crosses each (from φ): where [`PressureJumps`] act.
+    pub fn interface_faces(
+        &self,
+        field: &PhaseField,
+        phases: &[PhaseProps],
+    ) -> Result<Vec<InterfaceFace>, SolverError> {
+        let material = cell_material(field, phases)?;
+        let grid = &self.config.grid;
+        Ok(crate::jump::interface_faces(
+            &material,
+            &self.velocity.layout,
+            grid.origin,
+            grid.h,
+        ))
     }
 
     /// Advances by `dt` with gravity plus `force`.
@@ -322,7 +352,7 @@ impl Solver {
         dt: f64,
         force: &dyn BodyForce,
     ) -> Result<StepReport, SolverError> {
-        self.step_inner(field, phases, dt, Some(force))
+        self.step_inner(field, phases, dt, Some(force), None)
     }
 
     /// Projects the current velocity only (initial conditions, tests); `dt` scales the
@@ -337,7 +367,7 @@ impl Solver {
         let material = cell_material(field, phases)?;
         let mut vel = self.velocity.clone();
         let rho = [0, 1, 2].map(|a| face_densities(&material, &vel.layout, a));
-        let out = pressure::project(&mut vel, &self.open, &rho, dt, &self.config.pressure)?;
+        let out = pressure::project(&mut vel, &self.open, &rho, dt, &self.config.pressure, None)?;
         self.velocity = vel;
         self.pressure = out.pressure;
         Ok(out.stats)
@@ -370,6 +400,7 @@ impl Solver {
         phases: &[PhaseProps],
         dt: f64,
         force: Option<&dyn BodyForce>,
+        jumps: Option<&PressureJumps>,
     ) -> Result<StepReport, SolverError> {
         self.check_inputs(field, dt)?;
         let material = cell_material(field, phases)?;
@@ -430,7 +461,15 @@ impl Solver {
         timings.viscosity = t2.elapsed().as_secs_f64();
 
         let t3 = Instant::now();
-        let projected = pressure::project(&mut vel, open, &rho, dt, &self.config.pressure)?;
+        let dense = jumps.map(|j| j.dense(&vel.layout));
+        let projected = pressure::project(
+            &mut vel,
+            open,
+            &rho,
+            dt,
+            &self.config.pressure,
+            dense.as_ref(),
+        )?;
         timings.pressure = t3.elapsed().as_secs_f64();
 
         for a in 0..3 {
