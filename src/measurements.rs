@@ -11,8 +11,8 @@ use polyphase_tracker::LabeledMesh;
 use serde_json::{json, Value};
 
 /// Adds each of the scene's measurements of `mesh` to the stats line under its name; the
-/// measurements of the fluid (`rise_velocity`, `velocity_profile`, coupled scenes only) come
-/// from `fluid`.
+/// measurements of the fluid (`rise_velocity`, `velocity_profile`, `pressure_jump`, coupled
+/// scenes only) come from `fluid`.
 pub fn add_measurements(
     line: &mut Value,
     scene: &Scene,
@@ -20,7 +20,10 @@ pub fn add_measurements(
     fluid: &dyn Fn(&MeasureKind) -> Result<Value>,
 ) -> Result<()> {
     for m in &scene.measures {
-        if let MeasureKind::RiseVelocity { .. } | MeasureKind::VelocityProfile { .. } = m.kind {
+        if let MeasureKind::RiseVelocity { .. }
+        | MeasureKind::VelocityProfile { .. }
+        | MeasureKind::PressureJump { .. } = m.kind
+        {
             line[m.name.as_str()] = fluid(&m.kind)?;
             continue;
         }

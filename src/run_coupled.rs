@@ -238,9 +238,19 @@ fn frame_line<T: InterfaceTracker>(
         "interface_cells": report.interface_cells,
         "interface_lag": report.interface_lag,
     });
+    if let Some(c) = report.capillary {
+        line["capillary"] = json!({
+            "dt_limit": c.dt_limit,
+            "faces": c.faces,
+            "missed_faces": c.missed,
+        });
+    }
     add_measurements(&mut line, scene, mesh, &|kind| {
         Ok(match *kind {
             MeasureKind::RiseVelocity { phase } => json!(sim.rise_velocity(phase)?),
+            MeasureKind::PressureJump { inside, outside } => {
+                json!(sim.pressure_jump(inside, outside))
+            }
             MeasureKind::VelocityProfile { component, axis } => {
                 let profile = sim.velocity_profile(component, axis)?;
                 let (position, value): (Vec<f64>, Vec<f64>) = profile.into_iter().unzip();

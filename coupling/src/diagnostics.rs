@@ -33,9 +33,10 @@ pub struct Piece {
     pub farthest: f64,
 }
 
-/// Evaluates one measurement on the tracker's mesh. `rise_velocity` and `velocity_profile`
-/// need the fluid ([`crate::CoupledSim::rise_velocity`],
-/// [`crate::CoupledSim::velocity_profile`]): here they are `Value(None)`.
+/// Evaluates one measurement on the tracker's mesh. `rise_velocity`, `velocity_profile` and
+/// `pressure_jump` need the fluid ([`crate::CoupledSim::rise_velocity`],
+/// [`crate::CoupledSim::velocity_profile`], [`crate::CoupledSim::pressure_jump`]): here they
+/// are `Value(None)`.
 pub fn measure(mesh: &LabeledMesh, kind: &MeasureKind) -> Measured {
     match *kind {
         MeasureKind::Front { phase, axis } => {
@@ -52,9 +53,9 @@ pub fn measure(mesh: &LabeledMesh, kind: &MeasureKind) -> Measured {
             Measured::Point((volume > 0.0).then(|| moment / volume))
         }
         MeasureKind::Pieces { phase } => Measured::Pieces(pieces(mesh, phase)),
-        MeasureKind::RiseVelocity { .. } | MeasureKind::VelocityProfile { .. } => {
-            Measured::Value(None)
-        }
+        MeasureKind::RiseVelocity { .. }
+        | MeasureKind::VelocityProfile { .. }
+        | MeasureKind::PressureJump { .. } => Measured::Value(None),
     }
 }
 

@@ -9,9 +9,11 @@ pub mod pending;
 pub mod rt_theory;
 pub mod setup;
 pub mod sim;
+pub mod tension;
 
 pub use diagnostics::{interface_extent, measure, pieces, Measured, Piece};
 pub use error::CouplingError;
 pub use rt_theory::RtLinear;
 pub use setup::{build_tracker, from_scene, with_tracker, AnyTracker};
-pub use sim::{interface_lag, CoupledSim, FrameReport, TimeControl};
+pub use sim::{interface_lag, CapillaryReport, CoupledSim, FrameReport, TimeControl};
+pub use tension::SurfaceTension;

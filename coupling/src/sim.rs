@@ -4,10 +4,11 @@ use std::time::Instant;
 
 use glam::DVec3;
 use polyphase_solver::{PhaseProps, Solver, SolverState};
-use polyphase_tracker::{InterfaceTracker, PhaseField, PhaseId, StepStats};
+use polyphase_tracker::{departure_point, InterfaceTracker, PhaseField, PhaseId, StepStats};
 
 use crate::error::CouplingError;
 use crate::pending::PendingSteps;
+use crate::tension::SurfaceTension;
 
 /// Time-step control. Solver: dt = min(cfl·h/(max|u| + √(h|g|)), max_dt), shortened so a
 /// frame ends exactly on its time. Tracker (loose coupling, paper 004 §7.5): it advances once
@@ -50,6 +51,21 @@ pub struct FrameReport {
     /// Per phase, the volume (m³) the tracker's volume correction added over the frame
     /// ([`StepStats::volume_correction`], summed).
     pub volume_correction: Vec<f64>,
+    /// With surface tension: the capillary time-step limit (s) and, summed over the steps,
+    /// the interface faces that carried a tension and those where no interface of their pair
+    /// was found near the crossing (no jump there).
+    pub capillary: Option<CapillaryReport>,
+}
+
+/// Surface tension's part of a [`FrameReport`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CapillaryReport {
+    /// The capillary time-step limit (s), [`SurfaceTension::capillary_dt`].
+    pub dt_limit: f64,
+    /// Interface faces that carried a tension, summed over the frame's steps.
+    pub faces: usize,
+    /// Of those, faces without an interface of their pair near the crossing (no jump).
+    pub missed: usize,
 }
 
 impl FrameReport {
@@ -96,6 +112,7 @@ pub struct CoupledSim<T: InterfaceTracker> {
     time: f64,
     steps: usize,
     pending: Option<PendingSteps>,
+    tension: Option<SurfaceTension>,
 }
 
 impl<T: InterfaceTracker> CoupledSim<T> {
@@ -132,6 +149,20 @@ impl<T: InterfaceTracker> CoupledSim<T> {
             time: 0.0,
             steps: 0,
             pending: None,
+            tension: None,
+        })
+    }
+
+    /// Adds surface tension (measured on the tracker's current mesh from now on).
+    pub fn set_tension(&mut self, mut tension: SurfaceTension) {
+        tension.refresh(self.tracker.mesh());
+        self.tension = Some(tension);
+    }
+
+    /// The capillary time-step limit (∞ without surface tension).
+    pub fn capillary_dt(&self) -> f64 {
+        self.tension.as_ref().map_or(f64::INFINITY, |t| {
+            t.capillary_dt(&self.phases, self.solver.grid().h)
         })
     }
 
@@ -163,6 +194,23 @@ impl<T: InterfaceTracker> CoupledSim<T> {
             }
         }
         Ok((n > 0).then(|| sum / n as f64))
+    }
+
+    /// The mean pressure (Pa) of the solver cells of `inside` minus that of the cells of
+    /// `outside`; `None` when either has no cell. A static drop's Laplace jump σκ.
+    pub fn pressure_jump(&self, inside: PhaseId, outside: PhaseId) -> Option<f64> {
+        let field = self.tracker.sample(self.solver.grid());
+        let mean = |phase: PhaseId| {
+            let (mut sum, mut n) = (0.0, 0usize);
+            for (p, &chi) in self.solver.pressure().iter().zip(&field.chi) {
+                if chi == phase {
+                    sum += p;
+                    n += 1;
+                }
+            }
+            (n > 0).then(|| sum / n as f64)
+        };
+        Some(mean(inside)? - mean(outside)?)
     }
 
     /// (centre coordinate, mean velocity `component`) of each layer of solver cells across
@@ -248,7 +296,22 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         let t1 = Instant::now();
         let before = self.solver.interface_velocity(&field, &self.phases, band)?;
         let mut interface_secs = t1.elapsed().as_secs_f64();
-        let solved = self.solver.step(&field, &self.phases, dt)?;
+        let solved = match &self.tension {
+            Some(tension) => {
+                let faces = self.solver.interface_faces(&field, &self.phases)?;
+                let locate = |x| match &self.pending {
+                    Some(p) => departure_point(p, x, p.start(), p.duration()),
+                    None => x,
+                };
+                let (jumps, stats) = tension.jumps(&faces, locate, 2.0 * grid.h);
+                let c = report.capillary.get_or_insert_with(Default::default);
+                c.faces += stats.faces;
+                c.missed += stats.missed;
+                self.solver
+                    .step_with_jumps(&field, &self.phases, dt, &jumps)?
+            }
+            None => self.solver.step(&field, &self.phases, dt)?,
+        };
         report.add("advect_velocity", solved.timings.advection);
         report.add("forces", solved.timings.forces);
         report.add("viscosity", solved.timings.viscosity);
@@ -277,7 +340,10 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         let travel = pending.travel();
         self.time += dt;
         self.steps += 1;
-        if sync || travel >= self.control.tracker_travel {
+        // Surface tension reads κ off the mesh, so the mesh must follow every step: a κ that
+        // lags the shape by the tracker's usual several steps drives capillary waves unstable
+        // (measured: a static drop blew up within five frames).
+        if sync || travel >= self.control.tracker_travel || self.tension.is_some() {
             self.flush(report)?;
         }
         Ok(())
@@ -295,6 +361,11 @@ impl<T: InterfaceTracker> CoupledSim<T> {
             .tracker
             .sample_advected(&grid, &pending, start, duration);
         let tracked: StepStats = self.tracker.advance(&pending, start, duration)?;
+        if let Some(tension) = &mut self.tension {
+            let t = Instant::now();
+            tension.refresh(self.tracker.mesh());
+            report.add("curvature", t.elapsed().as_secs_f64());
+        }
         let lag = interface_lag(&seen, &self.tracker.sample(&grid));
         report.interface_lag = report.interface_lag.max(lag);
         for &(name, secs) in &tracked.stages {
@@ -316,10 +387,18 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         };
         while self.time < t_end {
             let remaining = t_end - self.time;
+            let capillary = self.capillary_dt();
             let limit = self
                 .solver
                 .cfl_dt(self.control.cfl)
-                .min(self.control.max_dt);
+                .min(self.control.max_dt)
+                .min(capillary);
+            if capillary.is_finite() {
+                report
+                    .capillary
+                    .get_or_insert_with(Default::default)
+                    .dt_limit = capillary;
+            }
             let dt = if remaining <= limit * (1.0 + 1e-9) {
                 remaining
             } else if remaining < 2.0 * limit {
