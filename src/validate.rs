@@ -4,6 +4,7 @@
 //! tolerances; the run goes to `out/validate/<case>/` like any `polyphase run`, the metrics
 //! are read off its `stats.jsonl`, and any failed metric makes the exit status non-zero.
 
+mod capillary;
 mod case;
 mod indicator;
 mod layered_flow;

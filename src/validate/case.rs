@@ -35,18 +35,25 @@ pub struct MetricSpec {
     /// Name in the table.
     pub name: String,
     /// `rt_linear_growth`, `free_fall`, `roundness`, `max_value`, `final_max`, `series`,
-    /// `surge_front`, `profile`, or the first-step kinds `indicator_accuracy` and
+    /// `surge_front`, `profile`, `laplace`, `oscillation_period`, or the first-step kinds `indicator_accuracy` and
     /// `indicator_mismatch_distance` (`indicator.rs`), which need no run.
     pub kind: String,
     /// The stats key it reads (a dotted path into a frame's JSON line, e.g. `tips.max`).
     #[serde(default)]
     pub key: Option<String>,
-    /// `rt_linear_growth`: the heavy and the light phase, by name.
+    /// `rt_linear_growth`: the heavy and the light phase; `laplace`, `oscillation_period`:
+    /// the drop's phase and the one around it; by name.
     #[serde(default)]
     pub phases: Option<[String; 2]>,
     /// `rt_linear_growth`: the perturbation's wavelength (m).
     #[serde(default)]
     pub wavelength: Option<f64>,
+    /// `laplace`, `oscillation_period`: the drop's equilibrium radius (m).
+    #[serde(default)]
+    pub radius: Option<f64>,
+    /// `oscillation_period`: the shape mode (default 2).
+    #[serde(default)]
+    pub mode: Option<u32>,
     /// `profile`: the phases of the layers from the low wall up, by name.
     #[serde(default)]
     pub layers: Option<Vec<String>>,

@@ -10,10 +10,12 @@ use polyphase_coupling::RtLinear;
 use polyphase_scenes::{BoundaryKind, MeasureKind, Scene, WALLS};
 use serde_json::Value;
 
+use super::capillary::{crossing_period, lamb_period, laplace_jump};
 use super::case::MetricSpec;
 use super::layered_flow::{Layer, LayeredFlow};
 use super::plot::{Plot, Series};
 use super::surge_front::Column;
+use polyphase_grid::PhaseId;
 
 /// One metric's result.
 #[derive(Clone, Debug)]
@@ -204,6 +206,45 @@ pub fn evaluate(
                 Some(plot),
             )
         }
+        "laplace" => {
+            let (_, sigma, r) = capillary_inputs(spec, scene)?;
+            let exact = laplace_jump(sigma, r, scene.file.domain.slab);
+            let k = key()?;
+            let mut mine = Vec::new();
+            for (f, &t) in frames[1..].iter().zip(&times[1..]) {
+                mine.push((t, number(f, k)?));
+            }
+            let ours = number(last, k)?;
+            let plot = over_time(
+                "p_inside − p_outside (Pa)",
+                curves(mine, "σκ", bound(exact), false),
+            );
+            (relative(ours, exact), Some(plot))
+        }
+        "oscillation_period" => {
+            let (pair, sigma, r) = capillary_inputs(spec, scene)?;
+            let k = key()?;
+            let mut a = Vec::with_capacity(frames.len());
+            for f in frames {
+                a.push(0.5 * (number(f, &format!("{k}.max"))? - number(f, &format!("{k}.min"))?));
+            }
+            let ours = crossing_period(&times, &a, r).with_context(|| {
+                format!("'{k}' crosses the radius {r} fewer than three times: run longer")
+            })?;
+            let density = |p: PhaseId| scene.file.phases[usize::from(p)].density;
+            let exact = lamb_period(
+                spec.mode.unwrap_or(2),
+                sigma,
+                density(pair.0),
+                density(pair.1),
+                r,
+                scene.file.domain.slab,
+            );
+            let mine = times.iter().copied().zip(a).collect();
+            let plot = over_time("half extent (m)", curves(mine, "radius", bound(r), false));
+            note = Some(format!("Lamb's period {exact:.5} s, ours {ours:.5} s"));
+            (relative(ours, exact), Some(plot))
+        }
         "final_max" => {
             let k = key()?;
             let worst = final_max(last, k)?;
@@ -216,7 +257,7 @@ pub fn evaluate(
         }
         other => bail!(
             "metric '{}': unknown kind '{other}' (kinds: rt_linear_growth, free_fall, roundness, \
-             max_value, final_max, series, surge_front, profile)",
+             max_value, final_max, series, surge_front, profile, laplace, oscillation_period)",
             spec.name
         ),
     };
@@ -231,6 +272,36 @@ pub fn evaluate(
         note,
         known_gap: spec.known_gap.clone(),
     })
+}
+
+/// The drop and surrounding phases' ids, their tension and the drop's radius of a capillary
+/// metric.
+fn capillary_inputs(spec: &MetricSpec, scene: &Scene) -> Result<((PhaseId, PhaseId), f64, f64)> {
+    let [drop, around] = spec
+        .phases
+        .as_ref()
+        .with_context(|| format!("metric '{}' needs `phases = [drop, around]`", spec.name))?;
+    let id = |name: &str| -> Result<PhaseId> {
+        scene
+            .file
+            .phases
+            .iter()
+            .position(|p| p.name == name)
+            .map(|i| i as PhaseId)
+            .with_context(|| format!("metric '{}': unknown phase '{name}'", spec.name))
+    };
+    let (a, b) = (id(drop)?, id(around)?);
+    let sigma = scene.tension.sigma(a, b);
+    ensure!(
+        sigma > 0.0,
+        "metric '{}': the scene has no tension between '{drop}' and '{around}'",
+        spec.name
+    );
+    let r = spec
+        .radius
+        .filter(|r| *r > 0.0)
+        .with_context(|| format!("metric '{}' needs a positive `radius`", spec.name))?;
+    Ok(((a, b), sigma, r))
 }
 
 /// The `surge_front` metric: ours (Z, at the worst reference point), theirs, the relative
