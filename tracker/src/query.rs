@@ -2,9 +2,13 @@
 //! [`LabeledMesh`] (paper 004 §4, Algorithm 1): nearest point through a bounding-box tree,
 //! then the phase from the feature the nearest point lies on — face: sign of
 //! `E = (x − y) · n`; edge: the triangle around the (possibly non-manifold) edge with the
-//! largest `|E|`; vertex: the paper's per-phase angle-weighted pseudonormals (§4.1, Fig. 3)
-//! fail where contouring folds a triple line, so the incident triangle nearest in angle to
-//! `x − y` decides instead ([`MeshQuery::nearest_in_angle`]).
+//! largest `|E|`; vertex: the incident triangle nearest in angle to `x − y`
+//! ([`MeshQuery::nearest_in_angle`]) instead of the paper's per-phase angle-weighted
+//! pseudonormals (§4.1, Fig. 3), which hold only where each phase's region is convex at the
+//! vertex. Every case reads the phase off the sheets around the nearest point, so it needs
+//! them in the order their labels assume: where sheets cross (a fold), the local picture
+//! contradicts the mesh's regions and the answer is wrong however far `x` is. Contouring keeps
+//! triple lines fold-free (`contour::extract`; issue 17).
 
 mod adjacency;
 mod bvh;
@@ -258,8 +262,8 @@ impl MeshQuery {
     /// triangle, on the side `d · n` gives. Ties (the nearest point is an edge direction that
     /// several triangles share) go to the largest `|d · n|`, the edge rule, then to the lowest
     /// index. Per-phase pseudonormals (paper 004 §4.1) decide this only for regions that are
-    /// convex at `v`; a vertex on a triple line folded by contouring has reflex regions, where
-    /// they picked the wrong phase up to 0.4 away (`enright` 64³, issue 17).
+    /// convex at `v`; on the first `enright` 64³ mesh they picked the wrong phase up to 0.4
+    /// away (issue 17).
     fn nearest_in_angle(&self, v: u32, d: DVec3) -> Option<usize> {
         let d = d.normalize_or_zero();
         let mut best: Option<(f64, f64, usize)> = None;

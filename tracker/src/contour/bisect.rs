@@ -261,8 +261,10 @@ fn line_intersection(a0: DVec3, a1: DVec3, b0: DVec3, b1: DVec3, min_len: f64) -
     Some(0.5 * ((a0 + u * s) + (b0 + v * t)))
 }
 
-/// Project `x` onto the plane of `tri` and clamp its barycentric weights to ≥ `MARGIN`.
-fn clamp_to_triangle(x: DVec3, tri: [DVec3; 3]) -> DVec3 {
+/// Project `x` onto the plane of `tri` and clamp its barycentric weights to ≥ `MARGIN`: keeps
+/// a triple point inside its face, and inside the triangle of the face's edge crossings
+/// (`MdTree::contour`).
+pub(crate) fn clamp_to_triangle(x: DVec3, tri: [DVec3; 3]) -> DVec3 {
     let (e1, e2, d) = (tri[1] - tri[0], tri[2] - tri[0], x - tri[0]);
     let (a, b, c) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
     let det = a * c - b * b;

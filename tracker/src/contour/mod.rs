@@ -17,7 +17,9 @@
 //!   positions so the mesh is closed and label-consistent by construction.
 //! - `bisect`: edge crossings by safeguarded regula falsi on brackets tightened with φ; triple
 //!   points by intersecting interface lines (the paper's corner-replacement iteration is the
-//!   fallback, and gives the quadruple points).
+//!   fallback, and gives the quadruple points), then kept inside the triangle of their face's
+//!   edge crossings (`extract`), so the sheets around a triple line keep the order their
+//!   labels assume (no fold; tested).
 //! - `closure`: the domain boundary, conforming to hanging nodes of coarse leaves.
 //! - `extract`: keys sorted before positions are computed, so the output is identical for any
 //!   thread count.

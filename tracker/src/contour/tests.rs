@@ -498,3 +498,64 @@ fn overestimated_distance_still_gives_a_closed_mesh() {
         .iter()
         .all(|&c| tree.coarse_neighbours(&tree.cells[c as usize]).is_empty()));
 }
+
+/// Interface edges shared by three or more triangles (triple lines) around which the
+/// triangles' sides do not fit together: sorted by angle about the edge, each triangle's side
+/// facing the next must carry the phase the next one's facing side carries. Where they do not,
+/// the sheets cross (a fold), and the phase the query reads off them near the edge contradicts
+/// the mesh's own regions, however far the query point is.
+fn folded_triple_lines(mesh: &LabeledMesh) -> usize {
+    let mut around: std::collections::BTreeMap<(u32, u32), Vec<usize>> = Default::default();
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        if mesh.labels[t].contains(&OUTSIDE) {
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            around.entry((a.min(b), a.max(b))).or_default().push(t);
+        }
+    }
+    around
+        .iter()
+        .filter(|(_, ts)| ts.len() >= 3)
+        .filter(|(&(a, b), ts)| {
+            let pa = mesh.vertices[a as usize];
+            let u = (mesh.vertices[b as usize] - pa).normalize();
+            let e1 = u.any_orthonormal_vector();
+            let e2 = u.cross(e1);
+            // (angle of the sheet about the edge, phase on its counter-clockwise side, on its
+            // clockwise side)
+            let mut sheets: Vec<(f64, PhaseId, PhaseId)> = ts
+                .iter()
+                .map(|&t| {
+                    let tri = mesh.triangles[t];
+                    let o = tri.into_iter().find(|&k| k != a && k != b).unwrap_or(a);
+                    let w = mesh.vertices[o as usize] - pa;
+                    let angle = w.dot(e2).atan2(w.dot(e1));
+                    let [front, back] = mesh.labels[t];
+                    if mesh.area_normal(t).dot(u.cross(w)) > 0.0 {
+                        (angle, front, back)
+                    } else {
+                        (angle, back, front)
+                    }
+                })
+                .collect();
+            sheets.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let n = sheets.len();
+            (0..n).any(|i| sheets[i].1 != sheets[(i + 1) % n].2)
+        })
+        .count()
+}
+
+#[test]
+fn triple_lines_do_not_fold() {
+    // A triple point computed outside the triangle of its face's three edge crossings (the
+    // interfaces meet near an edge) turned the sheets around its triple line inside out:
+    // 11 folded edges here, 12 on `enright` at 64³, before triple points were kept inside.
+    for (n, k) in [(32, 3), (40, 3), (32, 4)] {
+        let f = wedges(k);
+        let (grid, _, mesh) = build_and_contour(n, &f);
+        assert_valid(&mesh, &grid);
+        assert_eq!(folded_triple_lines(&mesh), 0, "{k} wedges at {n}³");
+    }
+}
