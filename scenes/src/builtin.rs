@@ -30,6 +30,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
         include_str!("../builtin/rayleigh_taylor_re256.toml"),
     ),
     ("fall", include_str!("../builtin/fall.toml")),
+    ("droplet", include_str!("../builtin/droplet.toml")),
     ("balls", include_str!("../builtin/balls.toml")),
     ("drop_pool", include_str!("../builtin/drop_pool.toml")),
     ("pool", include_str!("../builtin/pool.toml")),
