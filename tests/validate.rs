@@ -4,6 +4,8 @@
 mod common;
 
 use std::fs;
+use std::path::Path;
+use std::process::Output;
 
 use common::{polyphase, scratch};
 use serde_json::Value;
@@ -87,6 +89,17 @@ fn shipped_cases_pass_in_their_quick_versions() {
     }
 }
 
+/// `polyphase validate --quick` of the case folder `case`, runs under `dir/runs`.
+fn validate_quick(dir: &Path, case: &Path) -> Output {
+    polyphase(&[
+        "validate",
+        "--quick",
+        "--out",
+        dir.join("runs").to_str().unwrap(),
+        case.to_str().unwrap(),
+    ])
+}
+
 #[test]
 fn a_failing_or_unknown_case_fails_the_command_and_names_it() {
     let dir = scratch("validate_user");
@@ -111,13 +124,7 @@ tolerance = 0.05
     )
     .unwrap();
     fs::write(case.join("front.csv"), "time,front\n0.0,0.15\n0.1,0.3\n").unwrap();
-    let o = polyphase(&[
-        "validate",
-        "--quick",
-        "--out",
-        dir.join("runs").to_str().unwrap(),
-        case.to_str().unwrap(),
-    ]);
+    let o = validate_quick(&dir, &case);
     let (out, err) = (
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr),
@@ -137,13 +144,7 @@ tolerance = 0.05
         ),
     )
     .unwrap();
-    let o = polyphase(&[
-        "validate",
-        "--quick",
-        "--out",
-        dir.join("runs").to_str().unwrap(),
-        case.to_str().unwrap(),
-    ]);
+    let o = validate_quick(&dir, &case);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(!o.status.success(), "{out}");
     assert!(out.contains("FAIL: passes, remove known_gap"), "{out}");
