@@ -298,6 +298,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         let mut interface_secs = t1.elapsed().as_secs_f64();
         let solved = match &self.tension {
             Some(tension) => {
+                let t = Instant::now();
                 let faces = self.solver.interface_faces(&field, &self.phases)?;
                 let locate = |x| match &self.pending {
                     Some(p) => departure_point(p, x, p.start(), p.duration()),
@@ -307,6 +308,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
                 let c = report.capillary.get_or_insert_with(Default::default);
                 c.faces += stats.faces;
                 c.missed += stats.missed;
+                report.add("tension", t.elapsed().as_secs_f64());
                 self.solver
                     .step_with_jumps(&field, &self.phases, dt, &jumps)?
             }
