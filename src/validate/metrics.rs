@@ -607,7 +607,8 @@ fn read_series(path: &Path) -> Result<Vec<(f64, f64)>> {
     Ok(rows)
 }
 
-/// Piecewise-linear y(x) over increasing xs; `None` outside their range.
+/// Piecewise-linear y(x) on the first segment of `xs` whose ends bracket x (xs increasing, or
+/// non-decreasing as a front that pauses); `None` when none does.
 pub(super) fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> Option<f64> {
     xs.windows(2).zip(ys.windows(2)).find_map(|(x2, y2)| {
         (x2[0] <= x && x <= x2[1]).then(|| {

@@ -61,9 +61,10 @@ impl Column {
             None => 0.0,
             Some(mark) => {
                 let (rt, rz): (Vec<f64>, Vec<f64>) = reference.iter().copied().unzip();
-                let theirs = first_passage(&rt, &rz, mark)
+                // The first T at which each rising front reaches the mark.
+                let theirs = interpolate(&rz, &rt, mark)
                     .with_context(|| format!("the reference never reaches Z = {mark}"))?;
-                let mine = first_passage(&t, &z, mark)
+                let mine = interpolate(&z, &t, mark)
                     .with_context(|| format!("the run's front never reaches Z = {mark}"))?;
                 mine - theirs
             }
@@ -94,14 +95,6 @@ impl Column {
             worst_unshifted,
         })
     }
-}
-
-/// The first T at which a rising Z(T) reaches `mark`, interpolated.
-fn first_passage(t: &[f64], z: &[f64], mark: f64) -> Option<f64> {
-    t.windows(2).zip(z.windows(2)).find_map(|(t2, z2)| {
-        (z2[0] <= mark && mark <= z2[1] && z2[1] > z2[0])
-            .then(|| t2[0] + (t2[1] - t2[0]) * (mark - z2[0]) / (z2[1] - z2[0]))
-    })
 }
 
 #[cfg(test)]

@@ -254,48 +254,6 @@ fn parallel_answers_equal_serial_ones() {
     assert_eq!(serial, parallel);
 }
 
-/// Micro-benchmark (run with `--release --ignored --nocapture`): 100 k queries within one cell
-/// of a sphere of radius 24 cells contoured on a 64³ grid, on one thread and on all.
-#[test]
-#[ignore]
-fn bench_queries() {
-    use std::time::Instant;
-    let c = middle(64);
-    let f = move |x: DVec3| {
-        let d = (x - c).length() - 24.0 * H;
-        (d.abs(), PhaseId::from(d < 0.0))
-    };
-    let mesh = contoured([64; 3], &f);
-    let start = Instant::now();
-    let sampler = CurvatureSampler::new(&mesh, FIT * H);
-    println!(
-        "{} triangles: build {:.3} s",
-        mesh.triangle_count(),
-        start.elapsed().as_secs_f64()
-    );
-    let points = near_sphere(c, 24.0, 100_000, 1);
-    let start = Instant::now();
-    let serial: f64 = points
-        .iter()
-        .filter_map(|&x| sampler.at(x, 1, 0, 2.0 * H))
-        .sum();
-    println!(
-        "100 k queries, one thread: {:.3} s",
-        start.elapsed().as_secs_f64()
-    );
-    let start = Instant::now();
-    let parallel: f64 = points
-        .par_iter()
-        .filter_map(|&x| sampler.at(x, 1, 0, 2.0 * H))
-        .sum();
-    println!(
-        "100 k queries, {} threads: {:.3} s",
-        rayon::current_num_threads(),
-        start.elapsed().as_secs_f64()
-    );
-    assert!(serial.is_finite() && parallel.is_finite());
-}
-
 #[test]
 fn a_nearby_drop_stays_out_of_the_fit() {
     // Two balls of phase 1, radius 8 cells, two cells apart: around the points facing the
