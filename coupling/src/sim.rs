@@ -299,7 +299,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         let solved = match &self.tension {
             Some(tension) => {
                 let t = Instant::now();
-                let faces = self.solver.interface_faces(&field, &self.phases)?;
+                let faces = self.solver.interface_faces(&field)?;
                 let locate = |x| match &self.pending {
                     Some(p) => departure_point(p, x, p.start(), p.duration()),
                     None => x,

@@ -12,6 +12,7 @@ use polyphase_scenes::Tension;
 use polyphase_solver::{InterfaceFace, PhaseProps, PressureJumps};
 use polyphase_tracker::curvature::CurvatureSampler;
 use polyphase_tracker::LabeledMesh;
+use rayon::prelude::*;
 
 /// The tension of a scene and the curvature of the tracker's current mesh.
 pub struct SurfaceTension {
@@ -53,25 +54,29 @@ impl SurfaceTension {
     pub fn jumps(
         &self,
         faces: &[InterfaceFace],
-        locate: impl Fn(DVec3) -> DVec3,
+        locate: impl Fn(DVec3) -> DVec3 + Sync,
         reach: f64,
     ) -> (PressureJumps, JumpStats) {
-        let mut stats = JumpStats::default();
         let Some(sampler) = &self.sampler else {
-            return (PressureJumps::default(), stats);
+            return (PressureJumps::default(), JumpStats::default());
         };
-        let mut jumps = Vec::new();
-        for face in faces {
-            let sigma = self.tension.sigma(face.below, face.above);
-            if sigma == 0.0 {
-                continue;
-            }
-            stats.faces += 1;
-            match sampler.at(locate(face.crossing), face.below, face.above, reach) {
-                Some(kappa) => jumps.push((*face, -sigma * kappa)),
-                None => stats.missed += 1,
-            }
-        }
+        // One fit per face, in parallel; collected in face order, so any thread count gives
+        // the same jumps.
+        let fitted: Vec<(InterfaceFace, Option<f64>)> = faces
+            .par_iter()
+            .filter_map(|face| {
+                let sigma = self.tension.sigma(face.below, face.above);
+                (sigma != 0.0).then(|| {
+                    let kappa = sampler.at(locate(face.crossing), face.below, face.above, reach);
+                    (*face, kappa.map(|k| -sigma * k))
+                })
+            })
+            .collect();
+        let stats = JumpStats {
+            faces: fitted.len(),
+            missed: fitted.iter().filter(|(_, j)| j.is_none()).count(),
+        };
+        let jumps = fitted.into_iter().filter_map(|(f, j)| Some((f, j?)));
         (PressureJumps::new(jumps), stats)
     }
 

@@ -10,9 +10,9 @@
 //! projection's matrix is unchanged and J enters the right-hand side and the face update.
 
 use crate::layout::{idx, unidx, Layout};
-use crate::phase::CellMaterial;
+use crate::phase::crossing_fraction;
 use glam::DVec3;
-use polyphase_grid::PhaseId;
+use polyphase_grid::{PhaseField, PhaseId};
 
 /// A face of the solver grid that an interface crosses: its two cells hold different phases.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,13 +64,10 @@ impl PressureJumps {
     }
 }
 
-/// Every face between two cells of different phases, in component then index order.
-pub(crate) fn interface_faces(
-    m: &CellMaterial,
-    layout: &Layout,
-    origin: DVec3,
-    h: f64,
-) -> Vec<InterfaceFace> {
+/// Every face between two cells of different phases of `field` (checked against the grid
+/// already), in component then index order.
+pub(crate) fn interface_faces(field: &PhaseField, layout: &Layout) -> Vec<InterfaceFace> {
+    let (origin, h) = (field.grid.origin, field.grid.h);
     let centre =
         |p: [usize; 3]| origin + (DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) + 0.5) * h;
     let mut out = Vec::new();
@@ -88,25 +85,18 @@ pub(crate) fn interface_faces(
             pl[axis] = lo;
             ph[axis] = hi;
             let (a, b) = (idx(layout.n, pl), idx(layout.n, ph));
-            if m.chi[a] == m.chi[b] {
+            if field.chi[a] == field.chi[b] {
                 continue;
             }
-            let s = m.phi[a] + m.phi[b];
-            let theta = if s > 0.0 {
-                (m.phi[a] / s).clamp(0.0, 1.0)
-            } else {
-                0.5
-            };
-            // The centre above along the axis, one h up (unwrapped across a periodic seam).
-            let below = centre(pl);
+            // One h up from the centre below (unwrapped across a periodic seam).
             let mut step = DVec3::ZERO;
             step[axis] = h;
             out.push(InterfaceFace {
                 axis,
                 face,
-                below: m.chi[a],
-                above: m.chi[b],
-                crossing: below + theta * step,
+                below: field.chi[a],
+                above: field.chi[b],
+                crossing: centre(pl) + crossing_fraction(field.phi[a], field.phi[b]) * step,
             });
         }
     }

@@ -140,18 +140,25 @@ pub(crate) fn cell_material(
     })
 }
 
+/// Where the interface crosses the segment between two cell centres of different phases, as
+/// the fraction θ = φ_a/(φ_a + φ_b) of it from a (½ when both φ are 0); see the module doc.
+#[inline]
+pub(crate) fn crossing_fraction(phi_a: f64, phi_b: f64) -> f64 {
+    let s = phi_a + phi_b;
+    if s > 0.0 {
+        (phi_a / s).clamp(0.0, 1.0)
+    } else {
+        0.5
+    }
+}
+
 /// Ghost-fluid face density between cells `a` (below) and `b` (above); see the module doc.
 #[inline]
 pub(crate) fn face_density(m: &CellMaterial, a: usize, b: usize) -> f64 {
     if m.chi[a] == m.chi[b] {
         return 0.5 * (m.rho[a] + m.rho[b]);
     }
-    let s = m.phi[a] + m.phi[b];
-    let theta = if s > 0.0 {
-        (m.phi[a] / s).clamp(0.0, 1.0)
-    } else {
-        0.5
-    };
+    let theta = crossing_fraction(m.phi[a], m.phi[b]);
     theta * m.rho[a] + (1.0 - theta) * m.rho[b]
 }
 

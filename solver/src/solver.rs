@@ -329,19 +329,15 @@ impl Solver {
 
     /// The faces between cells of different phases in `field`, with where the interface
     /// crosses each (from φ): where [`PressureJumps`] act.
-    pub fn interface_faces(
-        &self,
-        field: &PhaseField,
-        phases: &[PhaseProps],
-    ) -> Result<Vec<InterfaceFace>, SolverError> {
-        let material = cell_material(field, phases)?;
-        let grid = &self.config.grid;
-        Ok(crate::jump::interface_faces(
-            &material,
-            &self.velocity.layout,
-            grid.origin,
-            grid.h,
-        ))
+    pub fn interface_faces(&self, field: &PhaseField) -> Result<Vec<InterfaceFace>, SolverError> {
+        let n = self.config.grid.cell_count();
+        if field.grid != self.config.grid || field.phi.len() != n || field.chi.len() != n {
+            return Err(SolverError::GridMismatch {
+                expected: format!("{:?}, {n} samples", self.config.grid),
+                found: format!("{:?}, {} samples", field.grid, field.phi.len()),
+            });
+        }
+        Ok(crate::jump::interface_faces(field, &self.velocity.layout))
     }
 
     /// Advances by `dt` with gravity plus `force`.

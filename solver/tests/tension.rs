@@ -16,7 +16,7 @@ fn static_drop(steps: usize) -> (f64, f64, f64) {
     let f = ball(g, DVec3::splat(0.5), r);
     let mut s = Solver::new(config(g)).unwrap();
     let laplace = sigma * 2.0 / r;
-    let faces = s.interface_faces(&f, &WATER_AIR).unwrap();
+    let faces = s.interface_faces(&f).unwrap();
     assert!(!faces.is_empty());
     // J = p_above − p_below: +σκ where the cell above is the drop, −σκ where it is below.
     let jumps = PressureJumps::new(
