@@ -274,6 +274,16 @@ pub fn evaluate(
     })
 }
 
+/// The index of the scene's phase `name`, which the metric names.
+fn phase_id(spec: &MetricSpec, scene: &Scene, name: &str) -> Result<usize> {
+    scene
+        .file
+        .phases
+        .iter()
+        .position(|p| p.name == name)
+        .with_context(|| format!("metric '{}': unknown phase '{name}'", spec.name))
+}
+
 /// The drop and surrounding phases' ids, their tension and the drop's radius of a capillary
 /// metric.
 fn capillary_inputs(spec: &MetricSpec, scene: &Scene) -> Result<((PhaseId, PhaseId), f64, f64)> {
@@ -281,16 +291,10 @@ fn capillary_inputs(spec: &MetricSpec, scene: &Scene) -> Result<((PhaseId, Phase
         .phases
         .as_ref()
         .with_context(|| format!("metric '{}' needs `phases = [drop, around]`", spec.name))?;
-    let id = |name: &str| -> Result<PhaseId> {
-        scene
-            .file
-            .phases
-            .iter()
-            .position(|p| p.name == name)
-            .map(|i| i as PhaseId)
-            .with_context(|| format!("metric '{}': unknown phase '{name}'", spec.name))
-    };
-    let (a, b) = (id(drop)?, id(around)?);
+    let (a, b) = (
+        phase_id(spec, scene, drop)? as PhaseId,
+        phase_id(spec, scene, around)? as PhaseId,
+    );
     let sigma = scene.tension.sigma(a, b);
     ensure!(
         sigma > 0.0,
@@ -401,12 +405,7 @@ fn rt_theory(spec: &MetricSpec, scene: &Scene, t: f64) -> Result<f64> {
         .wavelength
         .with_context(|| format!("metric '{}' needs `wavelength`", spec.name))?;
     let props = |name: &str| -> Result<(f64, f64)> {
-        let p = scene
-            .file
-            .phases
-            .iter()
-            .find(|p| p.name == name)
-            .with_context(|| format!("metric '{}': unknown phase '{name}'", spec.name))?;
+        let p = &scene.file.phases[phase_id(spec, scene, name)?];
         Ok((p.density, p.viscosity))
     };
     let rt = RtLinear {
