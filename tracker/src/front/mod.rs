@@ -12,3 +12,4 @@ pub mod params;
 pub mod predicates;
 pub mod remesh;
 pub mod response;
+pub mod topology;
