@@ -59,9 +59,9 @@ pub fn improve(c: &mut Connectivity, params: &FrontParams, target: f64) -> Remes
 
 /// Triangle geometry gathered for evaluating an operation.
 #[derive(Clone, Copy, Debug)]
-struct Tri {
-    p: [DVec3; 3],
-    labels: [PhaseId; 2],
+pub(crate) struct Tri {
+    pub(crate) p: [DVec3; 3],
+    pub(crate) labels: [PhaseId; 2],
 }
 
 impl Tri {
@@ -94,19 +94,19 @@ impl Tri {
 /// The state of one remeshing call: the mesh, the bounds, the broad phase over the live
 /// triangles and a scratch copy of the positions that holds each pseudo-motion's end state.
 pub(crate) struct Remesher<'a> {
-    c: &'a mut Connectivity,
-    b: Bounds,
-    grid: TriangleGrid,
+    pub(crate) c: &'a mut Connectivity,
+    pub(crate) b: Bounds,
+    pub(crate) grid: TriangleGrid,
     /// Pseudo-motion end positions; equal to the mesh's positions between operations.
-    x1: Vec<DVec3>,
+    pub(crate) x1: Vec<DVec3>,
     /// In the fail-safe pass only collision safety, inversion and non-degeneracy are checked.
-    failsafe: bool,
+    pub(crate) failsafe: bool,
     /// Splits move the new vertex to its butterfly point ([`FrontParams::butterfly`]).
     butterfly: bool,
-    stats: RemeshStats,
+    pub(crate) stats: RemeshStats,
     /// Runs the invariant checks after every operation (tests).
     #[cfg(test)]
-    verify: bool,
+    pub(crate) verify: bool,
     /// Phase volumes after the last verified operation (tests).
     #[cfg(test)]
     volumes: Vec<f64>,
@@ -137,7 +137,7 @@ impl<'a> Remesher<'a> {
         }
     }
 
-    fn tri(&self, t: u32) -> Tri {
+    pub(crate) fn tri(&self, t: u32) -> Tri {
         let [a, b, c] = self.c.triangle(t);
         Tri {
             p: [self.c.position(a), self.c.position(b), self.c.position(c)],
@@ -145,25 +145,25 @@ impl<'a> Remesher<'a> {
         }
     }
 
-    fn add_vertex(&mut self, p: DVec3) -> u32 {
+    pub(crate) fn add_vertex(&mut self, p: DVec3) -> u32 {
         self.x1.push(p);
         self.c.add_vertex(p)
     }
 
-    fn add_triangle(&mut self, tri: [u32; 3], labels: [PhaseId; 2]) -> u32 {
+    pub(crate) fn add_triangle(&mut self, tri: [u32; 3], labels: [PhaseId; 2]) -> u32 {
         let t = self.c.add_triangle(tri, labels);
         let (lo, hi) = tri_box(self.c, t);
         self.grid.insert(t, lo, hi);
         t
     }
 
-    fn remove_triangle(&mut self, t: u32) {
+    pub(crate) fn remove_triangle(&mut self, t: u32) {
         self.grid.remove(t);
         self.c.remove_triangle(t);
     }
 
     /// Moves vertex `v` to `p` and refreshes the broad-phase boxes of its triangles.
-    fn move_vertex(&mut self, v: u32, p: DVec3) {
+    pub(crate) fn move_vertex(&mut self, v: u32, p: DVec3) {
         self.c.mesh.vertices[v as usize] = p;
         self.x1[v as usize] = p;
         for i in 0..self.c.vertex_triangles(v).len() {
@@ -178,12 +178,12 @@ impl<'a> Remesher<'a> {
     /// outside `[min_angle, max_angle]` unless the worst angle improves, no area below the
     /// minimum, no phase volume changing by more than the bound. In the fail-safe pass only
     /// non-degeneracy is required. Counts a cancellation when the bounds fail.
-    fn bounds_allow(&mut self, old: &[Tri], new: &[Tri]) -> bool {
+    pub(crate) fn bounds_allow(&mut self, old: &[Tri], new: &[Tri]) -> bool {
         self.bounds_allow_volume(old, new, self.b.max_volume_change)
     }
 
     /// [`Self::bounds_allow`] with volume bound `max_volume_change`.
-    fn bounds_allow_volume(&mut self, old: &[Tri], new: &[Tri], max_volume_change: f64) -> bool {
+    pub(crate) fn bounds_allow_volume(&mut self, old: &[Tri], new: &[Tri], max_volume_change: f64) -> bool {
         let ok = if new.iter().any(|t| t.area().is_nan() || t.area() <= 0.0) {
             false
         } else if self.failsafe {
@@ -245,7 +245,7 @@ impl<'a> Remesher<'a> {
     /// After an operation in tests: the live mesh passes the shared invariant checks, and no
     /// phase volume moved by more than the bound (outside the fail-safe pass).
     #[cfg(test)]
-    fn verify_now(&mut self, what: &str) {
+    pub(crate) fn verify_now(&mut self, what: &str) {
         if !self.verify {
             return;
         }
@@ -268,7 +268,7 @@ impl<'a> Remesher<'a> {
     }
 
     #[cfg(not(test))]
-    fn verify_now(&mut self, _what: &str) {}
+    pub(crate) fn verify_now(&mut self, _what: &str) {}
 
     /// The live triangles as a plain mesh (unused vertices kept).
     #[cfg(test)]
@@ -283,7 +283,7 @@ impl<'a> Remesher<'a> {
 }
 
 /// Bounding box of live triangle `t`.
-fn tri_box(c: &Connectivity, t: u32) -> (DVec3, DVec3) {
+pub(crate) fn tri_box(c: &Connectivity, t: u32) -> (DVec3, DVec3) {
     let [a, b, d] = c.triangle(t).map(|v| c.position(v));
     (a.min(b).min(d), a.max(b).max(d))
 }

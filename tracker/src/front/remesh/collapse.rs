@@ -46,7 +46,7 @@ impl Remesher<'_> {
     /// Where edge `(a, b)` collapses to: `(kept vertex, removed vertex, position)`, or `None`
     /// when the collapse would merge two different features (both endpoints on features or
     /// non-manifold curves, joined by an ordinary edge). The fail-safe pass allows it.
-    pub(super) fn collapse_target(&self, a: u32, b: u32) -> Option<(u32, u32, DVec3)> {
+    pub(crate) fn collapse_target(&self, a: u32, b: u32) -> Option<(u32, u32, DVec3)> {
         let (va, vb) = (self.vertex_features(a), self.vertex_features(b));
         let (pa, pb) = (self.c.position(a), self.c.position(b));
         match va.rank().cmp(&vb.rank()) {
@@ -68,7 +68,7 @@ impl Remesher<'_> {
     }
 
     /// Collapses edge `(a, b)` if it is topologically valid, within bounds and collision-safe.
-    pub(super) fn try_collapse(&mut self, a: u32, b: u32) -> bool {
+    pub(crate) fn try_collapse(&mut self, a: u32, b: u32) -> bool {
         let mut edge_tris = Vec::new();
         self.c.edge_triangles(a, b, &mut edge_tris);
         if edge_tris.is_empty() {

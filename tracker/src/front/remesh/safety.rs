@@ -13,7 +13,7 @@ use crate::front::ccd::{edge_edge, vertex_triangle};
 impl Remesher<'_> {
     /// Is the motion of `moving` to `targets` collision-free? `merging`: the two ends of a
     /// collapsing edge, treated as one vertex. Counts a cancellation when it is not.
-    pub(super) fn pseudo_motion_is_safe(
+    pub(crate) fn pseudo_motion_is_safe(
         &mut self,
         moving: &[u32],
         targets: &[DVec3],

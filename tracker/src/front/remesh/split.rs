@@ -60,7 +60,7 @@ impl Remesher<'_> {
     /// Splits edge `(a, b)` at its midpoint if the bounds allow, then moves the new vertex to
     /// `smooth` (its butterfly point) if that is allowed too; `false` if cancelled or the edge
     /// no longer exists.
-    pub(super) fn try_split(&mut self, a: u32, b: u32, smooth: Option<DVec3>) -> bool {
+    pub(crate) fn try_split(&mut self, a: u32, b: u32, smooth: Option<DVec3>) -> bool {
         let mut tris = Vec::new();
         self.c.edge_triangles(a, b, &mut tris);
         if tris.is_empty() {
