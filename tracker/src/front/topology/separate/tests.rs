@@ -1,0 +1,209 @@
+//! Vertex separation and junction collapses on built configurations: two spheres touching at a
+//! vertex (Fig. 10 without gap triangles), four quarter-prisms around a quadruple edge (Fig. 9
+//! extruded, Fig. 4: the flow picks the direction), and a film shrinking between two triple
+//! curves (Fig. 5: collapse, then separation). Each separation is also checked inside
+//! [`separate_vertices`] (closed, consistent, intersection-free) as it happens.
+
+use glam::{DQuat, DVec3};
+use polyphase_grid::{PhaseId, VelocityField};
+
+use super::*;
+use crate::front::intersection::self_intersections;
+use crate::mesh::fixtures::{icosphere, lattice_mesh};
+use crate::mesh::LabeledMesh;
+
+/// Closed, label-consistent and free of intersections, or panic saying which failed.
+fn assert_clean(mesh: &LabeledMesh) {
+    if let Err(e) = crate::invariants::check(mesh, 0.0) {
+        panic!("{e}");
+    }
+    let hits = self_intersections(mesh);
+    assert!(hits.is_empty(), "{hits:?}");
+}
+
+/// Every vertex with a missing arc, with its missing arcs.
+fn irregular(c: &Connectivity) -> Vec<(u32, Vec<[PhaseId; 2]>)> {
+    (0..c.mesh.vertices.len() as u32)
+        .map(|v| (v, missing_arcs(c, v)))
+        .filter(|(_, m)| !m.is_empty())
+        .collect()
+}
+
+/// Number of triangles separating phases `a` and `b`.
+fn interface(mesh: &LabeledMesh, a: PhaseId, b: PhaseId) -> usize {
+    mesh.labels
+        .iter()
+        .filter(|l| **l == [a, b] || **l == [b, a])
+        .count()
+}
+
+/// The linear field `u = rates ∘ (x − centre)` (componentwise), constant in time.
+struct Linear {
+    centre: DVec3,
+    rates: DVec3,
+}
+
+impl VelocityField for Linear {
+    fn velocity(&self, x: DVec3, _t: f64) -> DVec3 {
+        self.rates * (x - self.centre)
+    }
+}
+
+/// Unit icospheres (level 2) of phases 1 (above) and 2 (below) in phase 0, rotated so that
+/// one vertex of each lies at the origin and merged there: they touch at that vertex only
+/// (each lies strictly on its side of the plane z = 0 elsewhere).
+fn touching_spheres() -> LabeledMesh {
+    let place = |phase: PhaseId, up: f64| {
+        let mut m = icosphere(DVec3::ZERO, 1.0, 2, phase, 0);
+        let q = DQuat::from_rotation_arc(m.vertices[0], DVec3::new(0.0, 0.0, -up));
+        for p in &mut m.vertices {
+            *p = q * *p + DVec3::new(0.0, 0.0, up);
+        }
+        m.vertices[0] = DVec3::ZERO;
+        m
+    };
+    let mut mesh = place(1, 1.0);
+    let below = place(2, -1.0);
+    let offset = mesh.vertices.len() as u32;
+    mesh.append(&below);
+    // Merge the lower sphere's touching vertex (now `offset`) into the upper one's (0).
+    for tri in &mut mesh.triangles {
+        for v in tri.iter_mut() {
+            if *v == offset {
+                *v = 0;
+            }
+        }
+    }
+    let mut c = Connectivity::new(mesh);
+    c.compact();
+    c.mesh
+}
+
+/// The unit cube in 4×4×4 cells, split into four quarter-prisms around the vertical line
+/// x = y = ½ and rotated 45° about it, so that the regions lie right (+x, phase 1), top
+/// (+y, 2), left (3) and bottom (4) of it: the pairs {1, 3} (along x) and {2, 4} (along y)
+/// meet only along the line, a quadruple edge irregular along its whole length (its two ends
+/// on the domain walls z = 0 and z = 1).
+fn quadruple_prism() -> LabeledMesh {
+    let mut mesh = lattice_mesh(4, |i, j, _| match (i >= 2, j >= 2) {
+        (true, false) => 1,
+        (true, true) => 2,
+        (false, true) => 3,
+        (false, false) => 4,
+    });
+    let centre = DVec3::new(0.5, 0.5, 0.0);
+    let q = DQuat::from_rotation_z(std::f64::consts::FRAC_PI_4);
+    for p in &mut mesh.vertices {
+        let r = q * (*p - centre);
+        // z is untouched by the rotation; keep it exact so the walls stay planar.
+        *p = DVec3::new(r.x + centre.x, r.y + centre.y, p.z);
+    }
+    mesh
+}
+
+#[test]
+fn spheres_touching_at_a_vertex_separate_once() {
+    let mesh = touching_spheres();
+    assert_clean(&mesh);
+    let mut c = Connectivity::new(mesh.clone());
+    assert_eq!(irregular(&c), vec![(0, vec![[1, 2]])]);
+    let target = mesh.mean_edge_length();
+    let n = separate_vertices(
+        &mut c,
+        &FrontParams::default(),
+        target,
+        &SeparationStrength::AreaDecrease,
+    );
+    // One missing arc, no gap triangles (both cones face phase 0 on either side).
+    assert_eq!(n, 1);
+    assert_clean(&c.mesh);
+    assert!(irregular(&c).is_empty(), "{:?}", irregular(&c));
+    assert_eq!(c.mesh.vertices.len(), mesh.vertices.len() + 1);
+    assert_eq!(c.mesh.triangle_count(), mesh.triangle_count());
+    // The two apexes: ε above and below the origin (d is along z by symmetry up to the
+    // icosphere's orientation, so only the distance is exact to rounding).
+    let eps = SEPARATION_FRACTION * target;
+    let apexes: Vec<DVec3> = c
+        .mesh
+        .vertices
+        .iter()
+        .copied()
+        .filter(|p| p.length() < 2.0 * eps)
+        .collect();
+    assert_eq!(apexes.len(), 2, "{apexes:?}");
+    assert!(((apexes[0] - apexes[1]).length() - 2.0 * eps).abs() < 1e-12);
+    // Each apex moved into its sphere, which loses at most ε × (its one-ring area ≈ 6 × the
+    // area of an equilateral triangle of side `target`) / 3.
+    let (before, after) = (mesh.phase_volumes(3), c.mesh.phase_volumes(3));
+    let bound = eps * 6.0 * 3f64.sqrt() / 4.0 * target * target / 3.0;
+    for k in [1, 2] {
+        let lost = before[k] - after[k];
+        assert!(
+            lost > 0.0 && lost < bound,
+            "phase {k}: lost {lost}, bound {bound}"
+        );
+    }
+}
+
+/// Separates the quadruple prism under the linear field with `rates` and returns the result
+/// and the number of separations.
+fn separate_prism(rates: DVec3) -> (LabeledMesh, usize) {
+    let mesh = quadruple_prism();
+    assert_clean(&mesh);
+    let mut c = Connectivity::new(mesh);
+    // The five vertices of the quadruple line each miss {1, 3} and {2, 4}.
+    let before = irregular(&c);
+    assert_eq!(before.len(), 5, "{before:?}");
+    assert!(before.iter().all(|(_, m)| *m == vec![[1, 3], [2, 4]]));
+    let field = Linear {
+        centre: DVec3::new(0.5, 0.5, 0.5),
+        rates,
+    };
+    let n = separate_vertices(
+        &mut c,
+        &FrontParams::default(),
+        0.25,
+        &SeparationStrength::Velocity(&field, 0.0),
+    );
+    assert_clean(&c.mesh);
+    (c.mesh, n)
+}
+
+#[test]
+fn a_quadruple_edge_separates_the_way_the_flow_asks() {
+    // Converging in x, stretching in y: top (2) and bottom (4) are pulled apart, left (3)
+    // and right (1) are pushed together and get a new interface.
+    let (mesh, n) = separate_prism(DVec3::new(-1.0, 1.0, 0.0));
+    let c = Connectivity::new(mesh.clone());
+    assert!(irregular(&c).is_empty(), "{:?}", irregular(&c));
+    assert_eq!(n, 5, "one separation per vertex of the line");
+    assert!(interface(&mesh, 1, 3) > 0);
+    assert_eq!(interface(&mesh, 2, 4), 0);
+    // The reverse flow separates the other pair.
+    let (mesh, n) = separate_prism(DVec3::new(1.0, -1.0, 0.0));
+    let c = Connectivity::new(mesh.clone());
+    assert!(irregular(&c).is_empty(), "{:?}", irregular(&c));
+    assert_eq!(n, 5);
+    assert!(interface(&mesh, 2, 4) > 0);
+    assert_eq!(interface(&mesh, 1, 3), 0);
+    // Volumes: the quarter-prisms (1/4 each) change by O(ε) slivers only.
+    for (k, v) in mesh.phase_volumes(5).iter().enumerate().skip(1) {
+        // Each of the 5 separations moves vertices by ε = 0.025 over a one-ring of area
+        // ≲ 1/4: well under 0.01 in all.
+        assert!((v - 0.25).abs() < 0.01, "phase {k}: {v}");
+    }
+}
+
+#[test]
+fn no_separation_without_positive_strength() {
+    // Compressed in both x and y: every separation direction has negative strength.
+    // The zero field has zero strength everywhere, which is not positive either.
+    // Compaction drops the lattice's interior points (on no wall), nothing else.
+    let mut unchanged = Connectivity::new(quadruple_prism());
+    unchanged.compact();
+    for rates in [DVec3::new(-1.0, -1.0, 0.0), DVec3::ZERO] {
+        let (mesh, n) = separate_prism(rates);
+        assert_eq!(n, 0, "rates {rates}");
+        assert_eq!(mesh, unchanged.mesh, "rates {rates}: the mesh changed");
+    }
+}
