@@ -97,16 +97,18 @@ mod tests {
     #[test]
     fn regions_touching_at_a_vertex_or_across_a_quadruple_edge_miss_an_arc() {
         // Two tetrahedra of phases 1 and 2 in phase 0 sharing only their apex at the origin.
-        let mut mesh = LabeledMesh::default();
-        mesh.vertices = vec![
-            DVec3::ZERO,
-            DVec3::new(1.0, 0.0, 1.0),
-            DVec3::new(-0.5, 0.8, 1.0),
-            DVec3::new(-0.5, -0.8, 1.0),
-            DVec3::new(1.0, 0.0, -1.0),
-            DVec3::new(-0.5, 0.8, -1.0),
-            DVec3::new(-0.5, -0.8, -1.0),
-        ];
+        let mut mesh = LabeledMesh {
+            vertices: vec![
+                DVec3::ZERO,
+                DVec3::new(1.0, 0.0, 1.0),
+                DVec3::new(-0.5, 0.8, 1.0),
+                DVec3::new(-0.5, -0.8, 1.0),
+                DVec3::new(1.0, 0.0, -1.0),
+                DVec3::new(-0.5, 0.8, -1.0),
+                DVec3::new(-0.5, -0.8, -1.0),
+            ],
+            ..LabeledMesh::default()
+        };
         for (tet, phase, inner) in [([0, 1, 2, 3], 1, 0.5), ([0, 4, 5, 6], 2, -0.5)] {
             let centre = DVec3::new(0.0, 0.0, inner);
             for k in 0..4 {

@@ -15,8 +15,10 @@ use crate::front::remesh::Remesher;
 /// `shrinking(a, b)` says the flow shortens edge `(a, b)` (§5.1.7). Shortest first (ties by
 /// index), repeating while that makes progress (at most 4 rounds); each collapse is the
 /// remesher's, with its link condition, bounds and CCD check, only the refusal to merge
-/// different curves lifted. Compacts `c` at the end (indices change). Returns the number of
-/// collapses.
+/// different curves lifted. `shrinking` receives indices of `c` as it is on entry: they stay
+/// valid during the call (a collapse keeps one endpoint's index and creates no vertex), so the
+/// caller can judge with its own per-vertex data (velocities). Compacts `c` at the end
+/// (indices change). Returns the number of collapses.
 pub fn collapse_junction_edges(
     c: &mut Connectivity,
     params: &FrontParams,

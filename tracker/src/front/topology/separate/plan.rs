@@ -132,7 +132,7 @@ impl Plan {
         if self
             .new_triangles(r.c)
             .iter()
-            .any(|p| !(tri_area(*p) > 0.0))
+            .any(|p| tri_area(*p).is_nan() || tri_area(*p) <= 0.0)
         {
             r.stats.bound_cancelled += 1;
             return false;

@@ -207,3 +207,80 @@ fn no_separation_without_positive_strength() {
         assert_eq!(mesh, unchanged.mesh, "rates {rates}: the mesh changed");
     }
 }
+
+/// A film of phases 1 (above, y > ⅔) | 2 (below) between two triple curves, squeezed to width
+/// `2 δ` in x: the unit cube in 3×3×3 cells, column i = 0 phase 3, i = 2 phase 4, the middle
+/// column split at y = ⅔; then x is mapped piecewise linearly so that the middle column spans
+/// `[½ − δ, ½ + δ]`. The triple curves run along z at x = ½ ± δ, y = ⅔; the film's edges
+/// across x at z = ⅓ and ⅔ join them (at z = 0 and 1 they lie on the domain wall).
+fn squeezed_film(delta: f64) -> LabeledMesh {
+    let mut mesh = lattice_mesh(3, |i, j, _| match (i, j) {
+        (0, _) => 3,
+        (2, _) => 4,
+        (_, 2) => 1,
+        _ => 2,
+    });
+    let (x1, x2) = (1.0 / 3.0, 2.0 / 3.0);
+    for p in &mut mesh.vertices {
+        p.x = if p.x <= x1 {
+            p.x / x1 * (0.5 - delta)
+        } else if p.x <= x2 {
+            0.5 - delta + (p.x - x1) / (x2 - x1) * 2.0 * delta
+        } else {
+            0.5 + delta + (p.x - x2) / (1.0 - x2) * (0.5 - delta)
+        };
+    }
+    mesh
+}
+
+#[test]
+fn junction_edges_collapse_only_where_the_flow_shortens_them() {
+    let target = 1.0 / 3.0;
+    // δ = 0.04: film edges 0.08 < min edge 1/6. Merging the triple curves tilts the walls
+    // between the columns by δ over a one-ring of area ~⅓, a volume change of ~δ/3·⅓ ≈ 0.0044:
+    // above the default bound (0.02 L³ = 0.00074), so the bound is raised for this test.
+    let params = FrontParams {
+        max_volume_change: 0.2,
+        ..FrontParams::default()
+    };
+    let mesh = squeezed_film(0.04);
+    assert_clean(&mesh);
+    let ab_before = interface(&mesh, 1, 2);
+    // Converging in x shortens the film edges (along x); stretching in x lengthens them.
+    for (rates, expected) in [
+        (DVec3::new(-1.0, 1.0, 0.0), 2),
+        (DVec3::new(1.0, -1.0, 0.0), 0),
+    ] {
+        let field = Linear {
+            centre: DVec3::splat(0.5),
+            rates,
+        };
+        let mut c = Connectivity::new(mesh.clone());
+        // The caller's per-vertex data (positions and velocities on entry): indices stay
+        // valid during the call.
+        let x = c.mesh.vertices.clone();
+        let u: Vec<DVec3> = x.iter().map(|&p| field.velocity(p, 0.0)).collect();
+        let shrinking_now = |a: u32, b: u32| {
+            let (a, b) = (a as usize, b as usize);
+            (u[a] - u[b]).dot(x[a] - x[b]) < 0.0
+        };
+        let n = collapse_junction_edges(&mut c, &params, target, &shrinking_now);
+        assert_eq!(n, expected, "rates {rates}");
+        assert_clean(&c.mesh);
+        // Where the curves met, the vertices are quadruple: four regions, film (1|2) still
+        // reaching them from the wall strips, {3, 4} the missing arc.
+        let quads: Vec<(u32, Vec<[PhaseId; 2]>)> = irregular(&c);
+        assert_eq!(quads.len(), expected, "{quads:?}");
+        assert!(quads.iter().all(|(_, m)| *m == vec![[3, 4]]), "{quads:?}");
+        assert_eq!(interface(&c.mesh, 1, 2), ab_before - 2 * expected);
+        // Separation agrees with the collapse (§5.1.7): the flow pushes 3 and 4 together,
+        // so separating them has negative strength and nothing is undone.
+        let s = separate_vertices(
+            &mut c,
+            &params,
+            target,
+            &SeparationStrength::Velocity(&field, 0.0),
+        );
+        assert_eq!(s, 0);
+    }
+}
