@@ -46,8 +46,9 @@ pub enum SeparationStrength<'a> {
     /// region A's), by central differences over ±ε. Positive when the flow carries A's side
     /// away from B's, i.e. when A and B are being pulled apart (and the two regions beside
     /// them pushed together, which the gap triangles then join: Fig. 2 middle, Fig. 4). The
-    /// paper calls this "converging along that direction"; converging in the sense of the
-    /// regions that get joined, the sign is the one that makes A and B separate.
+    /// paper's wording, "how strongly the velocity field is converging along that
+    /// direction", does not fix the sign; this is the one under which a T1 follows the flow
+    /// (the regions the flow brings together get the new interface).
     Velocity(&'a dyn VelocityField, f64),
 }
 

@@ -13,12 +13,15 @@ use crate::front::remesh::Remesher;
 /// A separation of vertex `v` with region `a` going to the new vertex `va`.
 #[derive(Clone, Debug)]
 pub(super) struct Plan {
+    /// The irregular vertex; it stays as `vb`.
     pub v: u32,
     /// Unit separation direction, from region B's one-ring centroid toward region A's.
     pub d: DVec3,
     /// Offset ε: `va = v + ε d`, `vb = v − ε d`.
     pub eps: f64,
+    /// Position of the new vertex `va`, `v + ε d`.
     pub pa: DVec3,
+    /// Position `v` moves to as `vb`, `v − ε d`.
     pub pb: DVec3,
     /// Triangles around `v` incident to region A (they move to `va`), sorted.
     pub to_a: Vec<u32>,
