@@ -169,6 +169,29 @@ fn separate_prism(rates: DVec3) -> (LabeledMesh, usize) {
     (c.mesh, n)
 }
 
+/// The new interface between `plus` and `minus` lies where the geometry says: just off the
+/// centroid of each of its triangles along `dir`, the point-phase oracle (which reads the
+/// phase from the nearest sheet's normal and labels) finds `plus`, and `minus` on the other
+/// side. Checks that the gap triangles' labels agree with their orientation, not only with
+/// each other. Returns how many triangles were checked.
+fn assert_sides(mesh: &LabeledMesh, plus: PhaseId, minus: PhaseId, dir: DVec3) -> usize {
+    let q = crate::query::MeshQuery::new(mesh, 0);
+    let mut n = 0;
+    for t in 0..mesh.triangle_count() {
+        let [f, b] = mesh.labels[t];
+        if [f.min(b), f.max(b)] != [plus.min(minus), plus.max(minus)] {
+            continue;
+        }
+        let centre = mesh.corners(t).iter().sum::<DVec3>() / 3.0;
+        // 1e-4 of the domain: well inside the gap triangles (height ~¼, width ~ε = 0.025).
+        let h = 1e-4;
+        assert_eq!(q.query(centre + h * dir).phase, plus, "triangle {t}");
+        assert_eq!(q.query(centre - h * dir).phase, minus, "triangle {t}");
+        n += 1;
+    }
+    n
+}
+
 #[test]
 fn a_quadruple_edge_separates_the_way_the_flow_asks() {
     // Converging in x, stretching in y: top (2) and bottom (4) are pulled apart, left (3)
@@ -179,6 +202,8 @@ fn a_quadruple_edge_separates_the_way_the_flow_asks() {
     assert_eq!(n, 5, "one separation per vertex of the line");
     assert!(interface(&mesh, 1, 3) > 0);
     assert_eq!(interface(&mesh, 2, 4), 0);
+    // Two gap triangles per vertex of the line, one to each axial neighbour (one at the ends).
+    assert_eq!(assert_sides(&mesh, 1, 3, DVec3::X), 8);
     // The reverse flow separates the other pair.
     let (mesh, n) = separate_prism(DVec3::new(1.0, -1.0, 0.0));
     let c = Connectivity::new(mesh.clone());
@@ -186,6 +211,7 @@ fn a_quadruple_edge_separates_the_way_the_flow_asks() {
     assert_eq!(n, 5);
     assert!(interface(&mesh, 2, 4) > 0);
     assert_eq!(interface(&mesh, 1, 3), 0);
+    assert_eq!(assert_sides(&mesh, 2, 4, DVec3::Y), 8);
     // Volumes: the quarter-prisms (1/4 each) change by O(ε) slivers only.
     for (k, v) in mesh.phase_volumes(5).iter().enumerate().skip(1) {
         // Each of the 5 separations moves vertices by ε = 0.025 over a one-ring of area
