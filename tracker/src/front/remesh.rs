@@ -116,6 +116,10 @@ pub(crate) struct Remesher<'a> {
     pub(crate) x1: Vec<DVec3>,
     /// In the fail-safe pass only collision safety, inversion and non-degeneracy are checked.
     pub(crate) failsafe: bool,
+    /// Collapses may join vertices on different features or non-manifold curves (paper 000
+    /// §5.1.7: the collapse that starts a T1 process, allowed only where the flow shortens the
+    /// edge; set by [`crate::front::topology::separate::collapse_junction_edges`]).
+    pub(crate) junction: bool,
     /// Splits move the new vertex to its butterfly point ([`FrontParams::butterfly`]).
     butterfly: bool,
     pub(crate) stats: RemeshStats,
@@ -143,6 +147,7 @@ impl<'a> Remesher<'a> {
             grid,
             x1,
             failsafe: false,
+            junction: false,
             butterfly: false,
             stats: RemeshStats::default(),
             #[cfg(test)]
@@ -292,7 +297,7 @@ impl<'a> Remesher<'a> {
 
     /// The live triangles as a plain mesh (unused vertices kept).
     #[cfg(test)]
-    fn live_mesh(&self) -> crate::mesh::LabeledMesh {
+    pub(crate) fn live_mesh(&self) -> crate::mesh::LabeledMesh {
         let mut mesh = self.c.mesh.clone();
         let keep: Vec<bool> = mesh.triangles.iter().map(|t| *t != DEAD).collect();
         let mut k = keep.iter();
