@@ -190,6 +190,7 @@ fn accumulate(total: &mut StepStats, step: &StepStats) {
     total.cells = step.cells;
     total.interface_cells = step.interface_cells;
     step.add_volume_correction_to(&mut total.volume_correction);
+    step.add_events_to(&mut total.events);
 }
 
 fn frame_line(
@@ -218,6 +219,10 @@ fn frame_line(
         "cells": stats.cells,
         "interface_cells": stats.interface_cells,
     });
+    if !stats.events.is_empty() {
+        let events: BTreeMap<&str, usize> = stats.events.iter().copied().collect();
+        line["events"] = json!(events);
+    }
     // Scene validation allows `rise_velocity` on coupled scenes only.
     add_measurements(&mut line, scene, mesh, &|_| Ok(Value::Null))?;
     add_volume_correction(

@@ -20,11 +20,24 @@ pub struct StepStats {
     /// Per phase, the volume (m³) the step's volume correction added to it, to first order in
     /// its offset (negative: removed); empty when the tracker corrects nothing.
     pub volume_correction: Vec<f64>,
+    /// (event name, count) of the step's discrete events, such as the front tracker's
+    /// topology changes; empty for a tracker that has none.
+    pub events: Vec<(&'static str, usize)>,
 }
 
 impl StepStats {
     /// Adds this step's per-phase volume correction into `total`, grown as needed: a frame's
     /// sum over its steps.
+    /// Adds this step's event counts into `total` (a frame's sum over its steps).
+    pub fn add_events_to(&self, total: &mut Vec<(&'static str, usize)>) {
+        for &(name, n) in &self.events {
+            match total.iter_mut().find(|(m, _)| *m == name) {
+                Some(entry) => entry.1 += n,
+                None => total.push((name, n)),
+            }
+        }
+    }
+
     pub fn add_volume_correction_to(&self, total: &mut Vec<f64>) {
         if total.len() < self.volume_correction.len() {
             total.resize(self.volume_correction.len(), 0.0);

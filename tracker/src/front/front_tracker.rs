@@ -12,6 +12,8 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 use self::detach::detach_box;
+use self::topology_step::T1Rule;
+pub use self::topology_step::TopologyCounts;
 use self::untangle::untangle;
 use super::connectivity::Connectivity;
 use super::flow::{FlowStep, MeshFlow};
@@ -51,6 +53,8 @@ pub struct FrontStepReport {
     pub dropped: usize,
     /// Substeps of a mesh-driven flow ([`FrontTracker::set_flow`]) within the step.
     pub flow_substeps: usize,
+    /// Topology changes.
+    pub topology: TopologyCounts,
 }
 
 /// Where a motion piece takes its velocities from.
@@ -209,6 +213,13 @@ impl FrontTracker {
             }
             let stats = improve(&mut self.c, &self.params, self.target);
             remesh = remesh.plus(&stats);
+            let rule = if flow.separates_by_area() {
+                T1Rule::Area(flow)
+            } else {
+                T1Rule::Off
+            };
+            let counts = self.topology(rule);
+            self.report.topology = self.report.topology.plus(&counts);
             self.flow_steps += 1;
             self.report.flow_substeps += 1;
             done += h;
@@ -381,6 +392,7 @@ impl InterfaceTracker for FrontTracker {
         } else {
             self.move_safely(Motion::Field(velocity), t, dt, 0)?;
             self.report.remesh = improve(&mut self.c, &self.params, self.target);
+            self.report.topology = self.topology(T1Rule::Field(velocity, t + dt));
         }
         let remesh = t1.elapsed().as_secs_f64() - self.seconds[0] - self.seconds[1];
         self.query = OnceLock::new();
@@ -389,6 +401,10 @@ impl InterfaceTracker for FrontTracker {
                 ("advect", self.seconds[0]),
                 ("collide", self.seconds[1]),
                 ("remesh", remesh),
+            ],
+            events: vec![
+                ("t1_collapses", self.report.topology.junction_collapses),
+                ("t1_separations", self.report.topology.separations),
             ],
             ..StepStats::default()
         })
@@ -421,6 +437,7 @@ impl InterfaceTracker for FrontTracker {
 }
 
 mod detach;
+mod topology_step;
 mod untangle;
 
 #[cfg(test)]
