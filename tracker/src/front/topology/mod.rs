@@ -5,3 +5,4 @@
 //! closed, label-consistent and intersection-free.
 
 pub mod degenerate;
+pub mod regions;
