@@ -6,3 +6,4 @@
 
 pub mod degenerate;
 pub mod regions;
+pub mod vanish;
