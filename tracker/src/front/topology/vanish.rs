@@ -10,9 +10,9 @@
 //! label-consistent; coincident triangles it leaves behind are resolved by
 //! [`remove_degenerate_pairs`]. With bounds relaxed as in the fail-safe pass of Appendix A.4,
 //! a target is accepted when no surviving triangle falls below the minimum area or turns
-//! over, domain-boundary
-//! faces stay in their planes, and exact CCD finds no collision of the motion (the merged
-//! vertices count as one, the vanishing triangles are left out, as for an edge collapse).
+//! over, domain-boundary faces stay in their planes, and exact CCD finds no collision of the
+//! motion (the merged vertices count as one, the vanishing triangles are left out, as for an
+//! edge collapse).
 //! The operation is atomic: when no target passes, or the region count would not drop by
 //! exactly one, the mesh is restored.
 
@@ -57,29 +57,37 @@ pub fn remove_small_regions(
         plane_tolerance: 1e-9 * target,
     };
     let mut removed = 0;
+    let mut all = regions(c);
     loop {
-        let all = regions(c);
         let mut small: Vec<&Region> = all.iter().filter(|r| r.volume < min_volume).collect();
+        if small.is_empty() {
+            return removed;
+        }
         small.sort_by(|x, y| {
             x.volume
                 .total_cmp(&y.volume)
                 .then((x.phase, x.triangles.first()).cmp(&(y.phase, y.triangles.first())))
         });
         let before = c.clone();
-        let done = small.into_iter().any(|r| {
+        let mut next = None;
+        for r in small {
             if contract(c, &r.triangles, &bounds) {
                 remove_degenerate_pairs(c);
-                if regions(c).len() + 1 == all.len() {
-                    return true;
+                let after = regions(c);
+                if after.len() + 1 == all.len() {
+                    next = Some(after);
+                    break;
                 }
                 *c = before.clone();
             }
-            false
-        });
-        if !done {
-            return removed;
         }
-        removed += 1;
+        match next {
+            Some(after) => {
+                all = after;
+                removed += 1;
+            }
+            None => return removed,
+        }
     }
 }
 
@@ -281,7 +289,7 @@ mod tests {
 
     use super::*;
     use crate::front::intersection::self_intersections;
-    use crate::mesh::fixtures::{icosphere, lattice_mesh};
+    use crate::mesh::fixtures::{icosphere, lattice_mesh, push_oriented};
     use crate::mesh::LabeledMesh;
 
     /// Compacts a copy of `c`, asserts it is closed, label-consistent and intersection-free,
@@ -490,5 +498,30 @@ mod tests {
         let (removed, after) = run(mesh.clone(), 0.08, min_volume);
         assert_eq!(removed, 0);
         assert_eq!(after, mesh);
+    }
+
+    #[test]
+    fn several_small_regions_go_in_one_call() {
+        // Two tiny balls of phases 2 and 3 and a tiny tetrahedron of phase 2 inside a ball
+        // of phase 1: three removals, each lowering the count by one (checked in `run`).
+        let outer = icosphere(DVec3::ZERO, 0.3, 2, 1, 0);
+        let mut mesh = outer.clone();
+        mesh.append(&icosphere(DVec3::new(0.1, 0.0, 0.0), 0.02, 1, 2, 1));
+        mesh.append(&icosphere(DVec3::new(-0.1, 0.0, 0.0), 0.015, 1, 3, 1));
+        let n = mesh.vertices.len() as u32;
+        let corners = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+        mesh.vertices
+            .extend(corners.map(|p| DVec3::new(0.0, 0.1, 0.0) + 0.02 * p));
+        let inside = DVec3::new(0.0, 0.1, 0.0) + DVec3::splat(0.004);
+        for tri in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
+            push_oriented(&mut mesh, tri.map(|k| n + k), inside, 1, 2);
+        }
+        let v = mesh.phase_volumes(4);
+        let (removed, after) = run(mesh, 0.08, 0.04f64.powi(3));
+        assert_eq!(removed, 3);
+        assert_eq!(after, outer);
+        let w = after.phase_volumes(4);
+        // Phase 1 gets everything it surrounded.
+        assert!((w[1] - (v[1] + v[2] + v[3])).abs() < TOL, "{v:?} -> {w:?}");
     }
 }
