@@ -98,7 +98,7 @@ fn same_winding(a: [u32; 3], b: [u32; 3]) -> bool {
 mod tests {
     use super::*;
     use crate::front::intersection::self_intersections;
-    use crate::mesh::fixtures::icosphere;
+    use crate::mesh::fixtures::{icosphere, push_oriented};
     use crate::mesh::LabeledMesh;
     use glam::DVec3;
 
@@ -227,5 +227,40 @@ mod tests {
             // Rounding of the tetra sums (see `assert_same_volumes`).
             assert!((x - y).abs() < 1e-12, "{v:?} vs {w:?}");
         }
+    }
+
+    #[test]
+    fn collapsed_tetrahedral_region_vanishes() {
+        // Fig. 13's last step: a tetrahedron of phase 2 inside the sphere's phase 1 has
+        // edge (a, b) collapsed by hand (its two triangles deleted, b renamed a), which
+        // leaves faces acd and (b → a)cd coincident, with phase 1 on both outer sides.
+        let original = icosphere(DVec3::ZERO, 0.5, 1, 1, 0);
+        let mut m = original.clone();
+        let n = m.vertices.len() as u32;
+        let corners = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+        m.vertices.extend(corners.map(|p| 0.1 * p));
+        let inside = DVec3::splat(0.02);
+        for tri in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
+            push_oriented(&mut m, tri.map(|k| n + k), inside, 1, 2);
+        }
+        crate::invariants::check(&m, 0.0).expect("sphere with a tetrahedron is valid");
+        let (a, b) = (n, n + 1);
+        let mut c = Connectivity::new(m.clone());
+        let mut on_edge = Vec::new();
+        c.edge_triangles(a, b, &mut on_edge);
+        assert_eq!(on_edge.len(), 2);
+        for &t in &on_edge {
+            c.remove_triangle(t);
+        }
+        let t = c.vertex_triangles(b)[0];
+        let (tri, labels) = (c.triangle(t), c.labels(t));
+        c.remove_triangle(t);
+        c.add_triangle(tri.map(|v| if v == b { a } else { v }), labels);
+        // The paper's observation: the coincident pair is consistently labeled.
+        let mut collapsed = c.clone();
+        collapsed.compact();
+        crate::invariants::check(&collapsed.mesh, 0.0).expect("collapse keeps labels consistent");
+        assert_eq!(remove_degenerate_pairs(&mut c), 1);
+        assert_eq!(clean(&c), original);
     }
 }
