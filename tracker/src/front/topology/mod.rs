@@ -4,5 +4,8 @@
 //! operation is atomic and collision-safe like the remeshing operations, so the mesh stays
 //! closed, label-consistent and intersection-free.
 
+pub mod degenerate;
 pub mod region_graph;
+pub mod regions;
 pub mod separate;
+pub mod vanish;
