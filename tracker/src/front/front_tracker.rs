@@ -403,6 +403,7 @@ impl InterfaceTracker for FrontTracker {
                 ("remesh", remesh),
             ],
             events: vec![
+                ("flow_substeps", self.report.flow_substeps),
                 ("t1_collapses", self.report.topology.junction_collapses),
                 ("t1_separations", self.report.topology.separations),
             ],
