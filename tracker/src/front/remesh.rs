@@ -65,11 +65,11 @@ pub(crate) struct Tri {
 }
 
 impl Tri {
-    fn area_normal(&self) -> DVec3 {
+    pub(crate) fn area_normal(&self) -> DVec3 {
         (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0])
     }
 
-    fn area(&self) -> f64 {
+    pub(crate) fn area(&self) -> f64 {
         0.5 * self.area_normal().length()
     }
 
@@ -183,7 +183,12 @@ impl<'a> Remesher<'a> {
     }
 
     /// [`Self::bounds_allow`] with volume bound `max_volume_change`.
-    pub(crate) fn bounds_allow_volume(&mut self, old: &[Tri], new: &[Tri], max_volume_change: f64) -> bool {
+    pub(crate) fn bounds_allow_volume(
+        &mut self,
+        old: &[Tri],
+        new: &[Tri],
+        max_volume_change: f64,
+    ) -> bool {
         let ok = if new.iter().any(|t| t.area().is_nan() || t.area() <= 0.0) {
             false
         } else if self.failsafe {
@@ -272,7 +277,7 @@ impl<'a> Remesher<'a> {
 
     /// The live triangles as a plain mesh (unused vertices kept).
     #[cfg(test)]
-    fn live_mesh(&self) -> crate::mesh::LabeledMesh {
+    pub(crate) fn live_mesh(&self) -> crate::mesh::LabeledMesh {
         let mut mesh = self.c.mesh.clone();
         let keep: Vec<bool> = mesh.triangles.iter().map(|t| *t != DEAD).collect();
         let mut k = keep.iter();
@@ -320,7 +325,7 @@ fn volume_change(old: &[Tri], new: &[Tri]) -> f64 {
 
 /// Triangle `tri` rotated so that it starts with the directed edge `(a, b)`, or `None` when it
 /// traverses the edge from `b` to `a` (or does not contain it).
-fn starting_with(tri: [u32; 3], a: u32, b: u32) -> Option<[u32; 3]> {
+pub(crate) fn starting_with(tri: [u32; 3], a: u32, b: u32) -> Option<[u32; 3]> {
     (0..3)
         .map(|k| [tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]])
         .find(|r| r[0] == a && r[1] == b)

@@ -3,3 +3,5 @@
 //! irregular vertices) and T2 processes (removal of degenerate and vanishing regions). Each
 //! operation is atomic and collision-safe like the remeshing operations, so the mesh stays
 //! closed, label-consistent and intersection-free.
+
+pub mod merge;
