@@ -4,4 +4,5 @@
 //! operation is atomic and collision-safe like the remeshing operations, so the mesh stays
 //! closed, label-consistent and intersection-free.
 
+pub mod degenerate;
 pub mod merge;
