@@ -3,12 +3,13 @@
 //! vertex at the closest points (compatible remeshing), and the two vertices are snapped into
 //! one at their average position. Repeated over a contact region this zips the surfaces
 //! together face to face; the coincident triangle pairs it leaves are the degenerate zero-volume
-//! regions of §5.2.
+//! regions of §5.2, removed after each pass (deleted where the same phase met itself, replaced
+//! by one separating triangle where two phases met).
 //!
 //! Every split and snap is atomic: checked against the remeshing bounds and by continuous
 //! collision detection, and either completed or cancelled, so the mesh stays closed,
-//! label-consistent and intersection-free (coincident triangle pairs aside, which §5.2
-//! removes).
+//! label-consistent and intersection-free (coincident triangle pairs aside, until the removal
+//! at the end of the pass).
 
 mod proximity;
 mod snap;
@@ -19,6 +20,7 @@ mod tests;
 use glam::DVec3;
 
 use self::proximity::{Pair, Prim};
+use super::degenerate::remove_degenerate_pairs;
 use crate::front::connectivity::Connectivity;
 use crate::front::params::{Bounds, FrontParams};
 use crate::front::remesh::Remesher;
@@ -33,6 +35,9 @@ pub struct MergeStats {
     /// Proximity pairs given up because a split or the snap failed a quality bound or would
     /// have caused a collision.
     pub cancelled: usize,
+    /// Coincident triangle pairs the snaps made, resolved by
+    /// [`remove_degenerate_pairs`] (§5.2).
+    pub degenerate: usize,
 }
 
 /// Passes over the proximity pairs at most; each pass snaps what the previous one's edits made
@@ -91,7 +96,8 @@ impl<'a> Merger<'a> {
         }
     }
 
-    /// Passes over the proximity pairs, closest first, until one snaps nothing.
+    /// Passes over the proximity pairs, closest first, each followed by the removal of the
+    /// coincident triangle pairs it made, until one snaps nothing.
     pub(crate) fn run(&mut self) {
         for _ in 0..MAX_PASSES {
             let mut snapped = 0;
@@ -100,6 +106,7 @@ impl<'a> Merger<'a> {
                     snapped += 1;
                 }
             }
+            self.remove_degenerate();
             if snapped == 0 {
                 break;
             }
@@ -139,6 +146,18 @@ impl<'a> Merger<'a> {
             self.stats.cancelled += 1;
             false
         }
+    }
+
+    /// Resolves the coincident triangle pairs the pass's snaps made (§5.2: where two surfaces
+    /// met face to face), and drops the removed triangles from the broad phase.
+    fn remove_degenerate(&mut self) {
+        self.stats.degenerate += remove_degenerate_pairs(self.r.c);
+        for t in 0..self.r.c.mesh.triangles.len() as u32 {
+            if !self.r.c.is_live(t) {
+                self.r.grid.remove(t);
+            }
+        }
+        self.verify_now("degenerate removal");
     }
 
     /// May the reduced primitives `a`, `b` be given vertices and snapped? They share no
