@@ -30,10 +30,10 @@ use crate::front::remesh::Remesher;
 pub struct MergeStats {
     /// Vertex pairs snapped into one.
     pub snaps: usize,
-    /// Edge and triangle splits made to give a proximity pair its vertices.
+    /// Edge and triangle splits that gave a snapped pair its vertices.
     pub splits: usize,
     /// Proximity pairs given up because a split or the snap failed a quality bound or would
-    /// have caused a collision.
+    /// have caused a collision (the pair's splits undone).
     pub cancelled: usize,
     /// Coincident triangle pairs the snaps made, resolved by
     /// [`remove_degenerate_pairs`] (§5.2).
@@ -130,20 +130,28 @@ impl<'a> Merger<'a> {
         if !self.snappable(&a, &b) {
             return false;
         }
-        let Some(u) = self.vertex_at(a, pa) else {
+        // The splits and the snap form one atomic operation: a cancelled snap undoes the
+        // splits made for it, which would only have refined the mesh for nothing.
+        let Some((u, split_a)) = self.vertex_at(a, pa) else {
             self.stats.cancelled += 1;
             return false;
         };
-        let Some(w) = self.vertex_at(b, pb) else {
+        let Some((w, split_b)) = self.vertex_at(b, pb) else {
+            split_a.into_iter().for_each(|s| self.undo(s));
             self.stats.cancelled += 1;
+            self.verify_now("undone split");
             return false;
         };
         if self.try_snap(u, w) {
+            self.stats.splits += usize::from(split_a.is_some()) + usize::from(split_b.is_some());
             self.stats.snaps += 1;
-            self.verify_now("snap");
+            self.verify_now("split and snap");
             true
         } else {
+            split_b.into_iter().for_each(|s| self.undo(s));
+            split_a.into_iter().for_each(|s| self.undo(s));
             self.stats.cancelled += 1;
+            self.verify_now("cancelled snap");
             false
         }
     }

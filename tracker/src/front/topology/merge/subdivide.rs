@@ -54,23 +54,32 @@ impl Merger<'_> {
         }
     }
 
-    /// A vertex of primitive `p` at `point`: the vertex itself, or one split off there.
-    /// `None` when the split is cancelled.
-    pub(crate) fn vertex_at(&mut self, p: Prim, point: DVec3) -> Option<u32> {
-        let m = match p {
-            Prim::Vertex(v) => return Some(v),
+    /// A vertex of primitive `p` at `point`: the vertex itself, or one split off there (with
+    /// the record that undoes the split). `None` when the split is cancelled.
+    pub(crate) fn vertex_at(&mut self, p: Prim, point: DVec3) -> Option<(u32, Option<Split>)> {
+        let split = match p {
+            Prim::Vertex(v) => return Some((v, None)),
             Prim::Edge([a, b]) => self.split_edge_at(a, b, point)?,
             Prim::Triangle(t, _) => self.split_triangle_at(t, point)?,
         };
-        self.stats.splits += 1;
-        self.verify_now("split");
-        Some(m)
+        Some((split.vertex, Some(split)))
+    }
+
+    /// Undoes `split`, the last edit made near it: its children give way to its parents (the
+    /// split vertex is left unused).
+    pub(crate) fn undo(&mut self, split: Split) {
+        for t in split.children {
+            self.r.remove_triangle(t);
+        }
+        for (t, l) in split.parents {
+            self.r.add_triangle(t, l);
+        }
     }
 
     /// Splits edge `(a, b)` at `p` (a point of it): every triangle `[u, v, w]` on the edge
     /// becomes `[u, m, w]` and `[m, v, w]` with its labels (Appendix A.2, at `p` instead of the
-    /// midpoint). Returns the new vertex.
-    fn split_edge_at(&mut self, a: u32, b: u32, p: DVec3) -> Option<u32> {
+    /// midpoint).
+    fn split_edge_at(&mut self, a: u32, b: u32, p: DVec3) -> Option<Split> {
         let mut tris = Vec::new();
         self.r.c.edge_triangles(a, b, &mut tris);
         let parents: Vec<([u32; 3], [PhaseId; 2])> = tris
@@ -89,18 +98,17 @@ impl Merger<'_> {
                 .flat_map(|&([u, v, w], l)| [([u, m, w], l), ([m, v, w], l)])
                 .collect()
         };
-        self.replace(&tris, &parents, children, p)
+        self.replace(&tris, parents.clone(), children, p)
     }
 
     /// Splits triangle `t` into three at `p` (a point inside it), each child with its labels.
-    /// Returns the new vertex.
-    fn split_triangle_at(&mut self, t: u32, p: DVec3) -> Option<u32> {
+    fn split_triangle_at(&mut self, t: u32, p: DVec3) -> Option<Split> {
         let parents = [(self.r.c.triangle(t), self.r.c.labels(t))];
         let children = |m: u32| -> Vec<([u32; 3], [PhaseId; 2])> {
             let ([a, b, c], l) = parents[0];
             vec![([a, b, m], l), ([b, c, m], l), ([c, a, m], l)]
         };
-        self.replace(&[t], &parents, children, p)
+        self.replace(&[t], parents.to_vec(), children, p)
     }
 
     /// Replaces live triangles `old` (with vertices and labels `parents`) by `children` of a
@@ -109,10 +117,10 @@ impl Merger<'_> {
     fn replace(
         &mut self,
         old: &[u32],
-        parents: &[([u32; 3], [PhaseId; 2])],
+        parents: Vec<([u32; 3], [PhaseId; 2])>,
         children: impl Fn(u32) -> Vec<([u32; 3], [PhaseId; 2])>,
         p: DVec3,
-    ) -> Option<u32> {
+    ) -> Option<Split> {
         if old.is_empty() {
             return None;
         }
@@ -130,25 +138,36 @@ impl Merger<'_> {
         if !self.r.bounds_allow(&before, &after) {
             return None;
         }
-        let m = self.r.add_vertex(p);
+        let vertex = self.r.add_vertex(p);
         for &t in old {
             self.r.remove_triangle(t);
         }
-        let added: Vec<u32> = children(m)
+        let children = children(vertex)
             .into_iter()
             .map(|(t, l)| self.r.add_triangle(t, l))
             .collect();
+        let split = Split {
+            vertex,
+            children,
+            parents,
+        };
         // A zero-length pseudo-motion of the new vertex: the exact test of its triangles
         // against everything near, which a point rounded off the parent's plane could touch.
-        if self.r.pseudo_motion_is_safe(&[m], &[p], None) {
-            return Some(m);
+        if self.r.pseudo_motion_is_safe(&[vertex], &[p], None) {
+            Some(split)
+        } else {
+            self.undo(split);
+            None
         }
-        for t in added {
-            self.r.remove_triangle(t);
-        }
-        for &(t, l) in parents {
-            self.r.add_triangle(t, l);
-        }
-        None
     }
+}
+
+/// A completed split, kept so that it can be undone when the snap it prepared is cancelled.
+pub(crate) struct Split {
+    /// The new vertex.
+    vertex: u32,
+    /// The triangles that replaced the parents.
+    children: Vec<u32>,
+    /// The replaced triangles' vertices and labels.
+    parents: Vec<([u32; 3], [PhaseId; 2])>,
 }
