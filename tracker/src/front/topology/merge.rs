@@ -6,10 +6,10 @@
 //! regions of §5.2, removed after each pass (deleted where the same phase met itself, replaced
 //! by one separating triangle where two phases met).
 //!
-//! Every split and snap is atomic: checked against the remeshing bounds and by continuous
-//! collision detection, and either completed or cancelled, so the mesh stays closed,
-//! label-consistent and intersection-free (coincident triangle pairs aside, until the removal
-//! at the end of the pass).
+//! A pair's splits and snap form one atomic operation: checked against the remeshing bounds
+//! and by continuous collision detection, and either completed or cancelled as a whole, so the
+//! mesh stays closed, label-consistent and intersection-free (coincident triangle pairs aside,
+//! until the removal at the end of the pass).
 
 mod proximity;
 mod snap;
@@ -45,9 +45,12 @@ pub struct MergeStats {
 /// next), and a pass without a snap ends the merge.
 const MAX_PASSES: usize = 8;
 
-/// Merges the parts of `c` closer than `distance` (paper 000 §6.2) and compacts the mesh
-/// (indices change). `target` is the remeshing target edge length that scales the quality
-/// bounds of [`FrontParams`].
+/// Merges the parts of `c` closer than `distance` (paper 000 §6.2), resolves the coincident
+/// triangle pairs that leaves (§5.2), and compacts the mesh (indices change). `target` is the
+/// remeshing target edge length that scales the quality bounds of [`FrontParams`]. Each snap
+/// moves its two vertices by at most `distance / 2`, which changes a phase's volume by at most
+/// a third of the area of their triangles times that (the gap being closed); splits and the
+/// removal of coincident pairs move nothing.
 pub fn merge_pass(
     c: &mut Connectivity,
     params: &FrontParams,
@@ -64,6 +67,7 @@ pub fn merge_pass(
 /// The state of one merge: the remesher whose operations, bounds and collision checks it
 /// shares, the merge distance and the subdivision threshold.
 pub(crate) struct Merger<'a> {
+    /// The mesh with its broad phase, bounds and operation counters.
     pub(crate) r: Remesher<'a>,
     /// Primitives closer than this are merged.
     distance: f64,
@@ -72,6 +76,7 @@ pub(crate) struct Merger<'a> {
     /// refinement). Half the collapse length: a closer split would make an edge that the next
     /// collapse pass removes again.
     near: f64,
+    /// What the merge did so far.
     pub(crate) stats: MergeStats,
     /// Runs the invariant and intersection checks after every operation (tests).
     #[cfg(test)]

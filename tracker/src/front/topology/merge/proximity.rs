@@ -12,8 +12,11 @@ use crate::front::response::proximity::{point_triangle_closest, segment_segment_
 /// held when found, so that a reused slot is not mistaken for it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub(crate) enum Prim {
+    /// A vertex.
     Vertex(u32),
+    /// An edge, ends ascending.
     Edge([u32; 2]),
+    /// A triangle slot and its vertices.
     Triangle(u32, [u32; 3]),
 }
 
@@ -36,8 +39,11 @@ impl Prim {
 /// A proximity pair found at the start of a pass: the two primitives and their distance then.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Pair {
+    /// Distance between the primitives when found (the sort key).
     pub(crate) distance: f64,
+    /// One primitive (the vertex of a vertex–triangle pair).
     pub(crate) a: Prim,
+    /// The other primitive.
     pub(crate) b: Prim,
 }
 
