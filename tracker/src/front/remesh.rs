@@ -183,12 +183,7 @@ impl<'a> Remesher<'a> {
     }
 
     /// [`Self::bounds_allow`] with volume bound `max_volume_change`.
-    pub(crate) fn bounds_allow_volume(
-        &mut self,
-        old: &[Tri],
-        new: &[Tri],
-        max_volume_change: f64,
-    ) -> bool {
+    pub(crate) fn bounds_allow_volume(&mut self, old: &[Tri], new: &[Tri], max_volume_change: f64) -> bool {
         let ok = if new.iter().any(|t| t.area().is_nan() || t.area() <= 0.0) {
             false
         } else if self.failsafe {
