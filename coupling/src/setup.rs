@@ -62,7 +62,7 @@ pub fn build_tracker(
         (TrackerKind::Front, None) => {
             let started = Instant::now();
             let params = scene.file.tracker.front.clone().unwrap_or_default();
-            let tracker =
+            let mut tracker =
                 FrontTracker::from_sampler(scene.grid, &initial, n_phases, background, params)
                     .map_err(|e| {
                         CouplingError::Invalid(format!(
@@ -70,6 +70,9 @@ pub fn build_tracker(
                             scene.file.name
                         ))
                     })?;
+            if let Some(flow) = &scene.mesh_flow {
+                tracker.set_flow(flow.clone());
+            }
             let first = StepStats {
                 stages: vec![("build", started.elapsed().as_secs_f64())],
                 ..StepStats::default()

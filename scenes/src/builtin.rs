@@ -35,6 +35,17 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("drop_pool", include_str!("../builtin/drop_pool.toml")),
     ("pool", include_str!("../builtin/pool.toml")),
     ("viscous", include_str!("../builtin/viscous.toml")),
+    ("merge2", include_str!("../builtin/merge2.toml")),
+    ("merge_same", include_str!("../builtin/merge_same.toml")),
+    ("spheres25", include_str!("../builtin/spheres25.toml")),
+    ("cyclic", include_str!("../builtin/cyclic.toml")),
+    ("noise4", include_str!("../builtin/noise4.toml")),
+    ("mcf_t1", include_str!("../builtin/mcf_t1.toml")),
+    ("mcf_t2", include_str!("../builtin/mcf_t2.toml")),
+    (
+        "double_bubble",
+        include_str!("../builtin/double_bubble.toml"),
+    ),
 ];
 
 /// (name, bytes) of the OBJ files the built-in scenes use (`file = "NAME"` in a built-in scene,

@@ -244,6 +244,43 @@ pub enum VelocitySpec {
     Vortex { period: f64 },
     /// The velocity of the MAC-grid fluid solver, coupled to the tracker (paper 004 §7.5).
     Fluid,
+    /// Constant-speed normal flow per pair of phases with area-weighted vertex normals
+    /// (paper 000 §8.2–8.3); front tracker only.
+    Normal { speeds: Vec<PairSpeedSpec> },
+    /// The same flow by face offsetting (Jiao 2007; paper 000 §8.2's cyclic flow); front
+    /// tracker only.
+    NormalFom { speeds: Vec<PairSpeedSpec> },
+    /// Mean-curvature flow (paper 000 §8.4) at `rate` m²/s (default 1); front tracker only.
+    MeanCurvature {
+        #[serde(default = "default_rate")]
+        rate: f64,
+    },
+    /// Curl noise alternating with normal flow, step by step (paper 000 §8.1, Fig. 21); front
+    /// tracker only.
+    CurlNoise {
+        /// Peak speed of the noise (m/s).
+        amplitude: f64,
+        /// Wavelength of the noise (m).
+        scale: f64,
+        /// Seed of the noise's modes.
+        #[serde(default)]
+        seed: u64,
+        speeds: Vec<PairSpeedSpec>,
+    },
+}
+
+fn default_rate() -> f64 {
+    1.0
+}
+
+/// `{ from = "red", into = "air", speed = 0.1 }`: the interface between two phases moves
+/// along its normal from `from` into `into` at `speed` m/s (negative: the other way).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairSpeedSpec {
+    pub from: String,
+    pub into: String,
+    pub speed: f64,
 }
 
 /// Solver settings of a coupled scene; every field has a default.

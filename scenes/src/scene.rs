@@ -8,11 +8,12 @@ use polyphase_grid::{GridSpec, PhaseId};
 use crate::error::SceneError;
 use crate::measure::{compile_measures, Measure};
 use crate::tension::{compile_tension, Tension};
+use polyphase_tracker::front::flow::{CurlNoise, MeshFlow, PairSpeed};
 use polyphase_tracker::front::params::FrontParams;
 
 use crate::format::{
-    BoundaryKind, BoundarySpec, HalfSpaceSpec, SceneFile, ShapeSpec, SolverSpec, TrackerKind,
-    TrackerSpec, VelocitySpec, WALLS,
+    BoundaryKind, BoundarySpec, HalfSpaceSpec, PairSpeedSpec, SceneFile, ShapeSpec, SolverSpec,
+    TrackerKind, TrackerSpec, VelocitySpec, WALLS,
 };
 use crate::mesh_file::SceneBase;
 use crate::mesh_sdf::MeshSdf;
@@ -32,8 +33,11 @@ pub struct Scene {
     pub grid: GridSpec,
     /// Initial phases.
     pub initial: InitialPhases,
-    /// The advecting flow (`Still` for a coupled scene, whose flow is the solver's).
+    /// The advecting flow (`Still` for a coupled scene, whose flow is the solver's, and for a
+    /// mesh-driven flow).
     pub velocity: AnalyticVelocity,
+    /// The mesh-driven flow of a front-tracker scene (`velocity.field = "normal"`, …).
+    pub mesh_flow: Option<MeshFlow>,
     /// The solver's grid of a coupled scene (same box as `grid`, cells a whole multiple
     /// larger); `None` for a passive scene.
     pub solver_grid: Option<GridSpec>,
@@ -113,6 +117,15 @@ impl Scene {
         let phases = compile_phases(&file, &bad)?;
         let find = |name: &str, place: &str| find_phase(&phases, name, place, &bad);
         let background = find(&file.background, "background")?;
+        let mesh_flow = compile_mesh_flow(&file.velocity, &find, &bad)?;
+        if mesh_flow.is_some() && file.tracker.kind != TrackerKind::Front {
+            return Err(bad(
+                "velocity.field",
+                "moves the interface mesh itself, which only the front tracker has; set \
+                 tracker = \"front\""
+                    .into(),
+            ));
+        }
         let base = SceneBase::from_origin(origin);
         let mut shapes = file
             .shapes
@@ -152,6 +165,7 @@ impl Scene {
             grid,
             initial: InitialPhases { background, shapes },
             velocity,
+            mesh_flow,
             solver_grid,
             measures,
             tension,
@@ -446,8 +460,56 @@ fn compile_velocity(v: &VelocitySpec, bad: &Bad) -> Result<AnalyticVelocity, Sce
         VelocitySpec::Vortex { period } => AnalyticVelocity::Vortex {
             period: positive(*period, "velocity.period", bad)?,
         },
-        VelocitySpec::Fluid => AnalyticVelocity::Still,
+        VelocitySpec::Fluid
+        | VelocitySpec::Normal { .. }
+        | VelocitySpec::NormalFom { .. }
+        | VelocitySpec::MeanCurvature { .. }
+        | VelocitySpec::CurlNoise { .. } => AnalyticVelocity::Still,
     })
+}
+
+/// The mesh-driven flow of `v`, if it is one, with its phases resolved.
+fn compile_mesh_flow(
+    v: &VelocitySpec,
+    find: &dyn Fn(&str, &str) -> Result<PhaseId, SceneError>,
+    bad: &Bad,
+) -> Result<Option<MeshFlow>, SceneError> {
+    let speeds = |list: &[PairSpeedSpec]| -> Result<Vec<PairSpeed>, SceneError> {
+        list.iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let place = format!("velocity.speeds[{i}]");
+                let from = find(&p.from, &format!("{place}.from"))?;
+                let into = find(&p.into, &format!("{place}.into"))?;
+                if from == into {
+                    return Err(bad(&place, "from and into must be different phases".into()));
+                }
+                let speed = finite(p.speed, &format!("{place}.speed"), bad)?;
+                Ok(PairSpeed { from, into, speed })
+            })
+            .collect()
+    };
+    Ok(Some(match v {
+        VelocitySpec::Normal { speeds: s } => MeshFlow::Normal(speeds(s)?),
+        VelocitySpec::NormalFom { speeds: s } => MeshFlow::NormalOffset(speeds(s)?),
+        VelocitySpec::MeanCurvature { rate } => MeshFlow::MeanCurvature {
+            rate: positive(*rate, "velocity.rate", bad)?,
+        },
+        VelocitySpec::CurlNoise {
+            amplitude,
+            scale,
+            seed,
+            speeds: s,
+        } => MeshFlow::NoiseAndNormal {
+            noise: CurlNoise::new(
+                positive(*amplitude, "velocity.amplitude", bad)?,
+                positive(*scale, "velocity.scale", bad)?,
+                *seed,
+            ),
+            speeds: speeds(s)?,
+        },
+        _ => return Ok(None),
+    }))
 }
 
 fn compile_phases(file: &SceneFile, bad: &Bad) -> Result<Vec<String>, SceneError> {

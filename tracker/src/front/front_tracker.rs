@@ -14,6 +14,7 @@ use thiserror::Error;
 use self::detach::detach_box;
 use self::untangle::untangle;
 use super::connectivity::Connectivity;
+use super::flow::{FlowStep, MeshFlow};
 use super::intersection::self_intersections;
 use super::params::{FrontParams, Integrator};
 use super::remesh::{improve, RemeshStats};
@@ -48,6 +49,17 @@ pub struct FrontStepReport {
     pub substeps: usize,
     /// Motion pieces dropped because collision resolution failed at the deepest halving.
     pub dropped: usize,
+    /// Substeps of a mesh-driven flow ([`FrontTracker::set_flow`]) within the step.
+    pub flow_substeps: usize,
+}
+
+/// Where a motion piece takes its velocities from.
+#[derive(Clone, Copy)]
+enum Motion<'a> {
+    /// A velocity field, integrated along each trajectory.
+    Field(&'a dyn VelocityField),
+    /// One velocity per vertex, held over the piece.
+    Vertices(&'a [DVec3]),
 }
 
 /// The front tracker's state: the mesh with its connectivity and the remeshing bounds.
@@ -68,6 +80,10 @@ pub struct FrontTracker {
     /// Volume enclosed by domain boundary faces taken off the starting mesh
     /// ([`detach::detach_box`]); it belongs to the background phase.
     detached_volume: f64,
+    /// A mesh-driven flow that replaces the velocity field handed to `advance`.
+    flow: Option<MeshFlow>,
+    /// Substeps of the flow taken so far (the alternating flow counts them).
+    flow_steps: u64,
 }
 
 impl FrontTracker {
@@ -107,6 +123,8 @@ impl FrontTracker {
             report: FrontStepReport::default(),
             seconds: [0.0; 2],
             detached_volume: 0.0,
+            flow: None,
+            flow_steps: 0,
         };
         // A contoured mesh is far from the target sizing: remesh until the bulk of the work is
         // done, so that the first steps do not carry it (at most 4 passes).
@@ -157,14 +175,63 @@ impl FrontTracker {
         self.report
     }
 
+    /// Moves the mesh by `flow` from now on: `advance` then ignores its velocity field and
+    /// takes as many substeps as the flow's stability and the travel limit need.
+    pub fn set_flow(&mut self, flow: MeshFlow) {
+        self.flow = Some(flow);
+    }
+
+    /// Advances by the mesh-driven flow over `dt` in substeps, each one moved collision-safely
+    /// and followed by remeshing (paper 000 Algorithm 1 per substep).
+    fn advance_flow(&mut self, flow: &MeshFlow, t: f64, dt: f64) -> Result<(), TrackerError> {
+        let mut done = 0.0;
+        let mut remesh = RemeshStats::default();
+        while done < dt {
+            let step = flow.step(&self.c, self.flow_steps);
+            let speed = match &step {
+                FlowStep::Vertices(v) => v.iter().map(|v| v.length()).fold(0.0, f64::max),
+                FlowStep::Field(noise) => noise.max_speed(),
+            };
+            let limit = (self.params.cfl * self.target / speed)
+                .min(flow.stable_dt(shortest_edge(&self.c).unwrap_or(self.target)));
+            // The last substep takes what is left; a remainder below a thousandth of the
+            // limit joins the substep before it, so no vanishing substep is taken.
+            let h = if dt - done <= 1.001 * limit {
+                dt - done
+            } else {
+                limit
+            };
+            match &step {
+                FlowStep::Vertices(v) => self.move_safely(Motion::Vertices(v), t + done, h, 0)?,
+                FlowStep::Field(noise) => {
+                    self.move_safely(Motion::Field(*noise), t + done, h, 0)?
+                }
+            }
+            let stats = improve(&mut self.c, &self.params, self.target);
+            remesh = remesh.plus(&stats);
+            self.flow_steps += 1;
+            self.report.flow_substeps += 1;
+            done += h;
+        }
+        self.report.remesh = remesh;
+        Ok(())
+    }
+
     /// End positions of every vertex moving from `x0` at time `t` for `dt`.
     fn integrate(
         &self,
-        velocity: &dyn VelocityField,
+        motion: Motion,
         x0: &[DVec3],
         t: f64,
         dt: f64,
     ) -> Result<Vec<DVec3>, TrackerError> {
+        let velocity = match motion {
+            Motion::Vertices(v) => {
+                let x1 = x0.iter().zip(v).map(|(&x, &v)| x + dt * v).collect();
+                return self.finite(x0, x1, t);
+            }
+            Motion::Field(velocity) => velocity,
+        };
         let integrator = self.params.integrator;
         let x1: Vec<DVec3> = x0
             .par_iter()
@@ -182,6 +249,12 @@ impl FrontTracker {
                 }
             })
             .collect();
+        self.finite(x0, x1, t)
+    }
+
+    /// `x1`, constrained to the domain, or the error naming the first vertex whose motion is
+    /// not finite.
+    fn finite(&self, x0: &[DVec3], x1: Vec<DVec3>, t: f64) -> Result<Vec<DVec3>, TrackerError> {
         if let Some(i) = x1.iter().position(|p| !p.is_finite()) {
             let x = x0[i];
             return Err(TrackerError::NonFiniteVelocity {
@@ -227,14 +300,14 @@ impl FrontTracker {
     /// stays where it is for it, which is always intersection-free).
     fn move_safely(
         &mut self,
-        velocity: &dyn VelocityField,
+        motion: Motion,
         t: f64,
         dt: f64,
         depth: u32,
     ) -> Result<(), TrackerError> {
         let start = Instant::now();
         let x0 = self.c.mesh.vertices.clone();
-        let mut x1 = self.integrate(velocity, &x0, t, dt)?;
+        let mut x1 = self.integrate(motion, &x0, t, dt)?;
         self.report.substeps += 1;
         let integrated = Instant::now();
         let resolved = resolve(&self.c.mesh.triangles, &x0, &mut x1, &self.collision).is_ok();
@@ -248,8 +321,8 @@ impl FrontTracker {
             self.report.dropped += 1;
             return Ok(());
         }
-        self.move_safely(velocity, t, 0.5 * dt, depth + 1)?;
-        self.move_safely(velocity, t + 0.5 * dt, 0.5 * dt, depth + 1)
+        self.move_safely(motion, t, 0.5 * dt, depth + 1)?;
+        self.move_safely(motion, t + 0.5 * dt, 0.5 * dt, depth + 1)
     }
 }
 
@@ -264,6 +337,18 @@ fn mean_interface_edge(mesh: &LabeledMesh) -> Option<f64> {
         .map(|[a, b]| (mesh.vertices[a as usize] - mesh.vertices[b as usize]).length())
         .fold((0.0, 0usize), |(s, n), l| (s + l, n + 1));
     (n > 0).then(|| sum / n as f64)
+}
+
+/// Length of the shortest edge of a live interface triangle.
+fn shortest_edge(c: &Connectivity) -> Option<f64> {
+    c.mesh
+        .triangles
+        .iter()
+        .zip(&c.mesh.labels)
+        .filter(|(t, l)| **t != super::connectivity::DEAD && !l.contains(&OUTSIDE))
+        .flat_map(|(&[a, b, d], _)| [[a, b], [b, d], [d, a]])
+        .map(|[a, b]| (c.position(a) - c.position(b)).length())
+        .reduce(f64::min)
 }
 
 /// Bounding box of the vertices of the domain boundary faces.
@@ -288,10 +373,16 @@ impl InterfaceTracker for FrontTracker {
     ) -> Result<StepStats, TrackerError> {
         self.report = FrontStepReport::default();
         self.seconds = [0.0; 2];
-        self.move_safely(velocity, t, dt, 0)?;
         let t1 = Instant::now();
-        self.report.remesh = improve(&mut self.c, &self.params, self.target);
-        let remesh = t1.elapsed().as_secs_f64();
+        if let Some(flow) = self.flow.take() {
+            let moved = self.advance_flow(&flow, t, dt);
+            self.flow = Some(flow);
+            moved?;
+        } else {
+            self.move_safely(Motion::Field(velocity), t, dt, 0)?;
+            self.report.remesh = improve(&mut self.c, &self.params, self.target);
+        }
+        let remesh = t1.elapsed().as_secs_f64() - self.seconds[0] - self.seconds[1];
         self.query = OnceLock::new();
         Ok(StepStats {
             stages: vec![

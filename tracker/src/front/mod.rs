@@ -6,6 +6,7 @@ pub mod broadphase;
 pub mod ccd;
 pub mod collision;
 pub mod connectivity;
+pub mod flow;
 pub mod front_tracker;
 pub mod intersection;
 pub mod params;

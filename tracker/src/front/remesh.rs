@@ -41,6 +41,21 @@ pub struct RemeshStats {
     pub failsafe: usize,
 }
 
+impl RemeshStats {
+    /// The counts of two calls together.
+    pub fn plus(&self, o: &RemeshStats) -> RemeshStats {
+        RemeshStats {
+            splits: self.splits + o.splits,
+            collapses: self.collapses + o.collapses,
+            flips: self.flips + o.flips,
+            smoothed: self.smoothed + o.smoothed,
+            unsafe_cancelled: self.unsafe_cancelled + o.unsafe_cancelled,
+            bound_cancelled: self.bound_cancelled + o.bound_cancelled,
+            failsafe: self.failsafe + o.failsafe,
+        }
+    }
+}
+
 /// Remeshes `c` in place toward edge length `target` and compacts it (indices change).
 pub fn improve(c: &mut Connectivity, params: &FrontParams, target: f64) -> RemeshStats {
     let mut r = Remesher::new(c, Bounds::new(params, target));
@@ -101,6 +116,10 @@ pub(crate) struct Remesher<'a> {
     pub(crate) x1: Vec<DVec3>,
     /// In the fail-safe pass only collision safety, inversion and non-degeneracy are checked.
     pub(crate) failsafe: bool,
+    /// Collapses may join vertices on different features or non-manifold curves (paper 000
+    /// §5.1.7: the collapse that starts a T1 process, allowed only where the flow shortens the
+    /// edge; set by [`crate::front::topology::separate::collapse_junction_edges`]).
+    pub(crate) junction: bool,
     /// Splits move the new vertex to its butterfly point ([`FrontParams::butterfly`]).
     butterfly: bool,
     pub(crate) stats: RemeshStats,
@@ -128,6 +147,7 @@ impl<'a> Remesher<'a> {
             grid,
             x1,
             failsafe: false,
+            junction: false,
             butterfly: false,
             stats: RemeshStats::default(),
             #[cfg(test)]
@@ -183,7 +203,12 @@ impl<'a> Remesher<'a> {
     }
 
     /// [`Self::bounds_allow`] with volume bound `max_volume_change`.
-    pub(crate) fn bounds_allow_volume(&mut self, old: &[Tri], new: &[Tri], max_volume_change: f64) -> bool {
+    pub(crate) fn bounds_allow_volume(
+        &mut self,
+        old: &[Tri],
+        new: &[Tri],
+        max_volume_change: f64,
+    ) -> bool {
         let ok = if new.iter().any(|t| t.area().is_nan() || t.area() <= 0.0) {
             false
         } else if self.failsafe {

@@ -45,7 +45,8 @@ impl Remesher<'_> {
 
     /// Where edge `(a, b)` collapses to: `(kept vertex, removed vertex, position)`, or `None`
     /// when the collapse would merge two different features (both endpoints on features or
-    /// non-manifold curves, joined by an ordinary edge). The fail-safe pass allows it.
+    /// non-manifold curves, joined by an ordinary edge). The fail-safe pass allows it, and so
+    /// does a junction collapse ([`Remesher::junction`], paper 000 §5.1.7).
     pub(crate) fn collapse_target(&self, a: u32, b: u32) -> Option<(u32, u32, DVec3)> {
         let (va, vb) = (self.vertex_features(a), self.vertex_features(b));
         let (pa, pb) = (self.c.position(a), self.c.position(b));
@@ -55,7 +56,7 @@ impl Remesher<'_> {
             std::cmp::Ordering::Equal => {
                 let joined = va.feature_neighbours.contains(&b);
                 let separate_features = (va.kind != Kind::Smooth || va.non_manifold) && !joined;
-                if separate_features && !self.failsafe {
+                if separate_features && !self.failsafe && !self.junction {
                     None
                 } else if va.kind == Kind::Peak && !self.failsafe {
                     // Two corners: either position destroys one of them.

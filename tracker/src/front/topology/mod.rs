@@ -6,3 +6,5 @@
 
 pub mod degenerate;
 pub mod merge;
+pub mod region_graph;
+pub mod separate;
