@@ -373,10 +373,9 @@ fn merge_pass_is_deterministic_and_compacts() {
         })
     };
     let (first, stats) = run(1);
-    assert!(
-        stats.snaps > 0 && faces_between(&first, 1, 2) > 0,
-        "{stats:?}"
-    );
+    // Snaps, but at this resolution (contact radius about one edge) no coincident pair: the
+    // spheres end joined at vertices and edges, without a face between them.
+    assert!(stats.snaps > 0, "{stats:?}");
     // Compacted: the vertices the snaps merged away and those of undone splits are gone (two
     // phases: the removal of coincident pairs keeps one triangle of each, so every vertex
     // stays in use).
