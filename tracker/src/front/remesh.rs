@@ -80,11 +80,11 @@ pub(crate) struct Tri {
 }
 
 impl Tri {
-    fn area_normal(&self) -> DVec3 {
+    pub(crate) fn area_normal(&self) -> DVec3 {
         (self.p[1] - self.p[0]).cross(self.p[2] - self.p[0])
     }
 
-    fn area(&self) -> f64 {
+    pub(crate) fn area(&self) -> f64 {
         0.5 * self.area_normal().length()
     }
 
@@ -345,7 +345,7 @@ fn volume_change(old: &[Tri], new: &[Tri]) -> f64 {
 
 /// Triangle `tri` rotated so that it starts with the directed edge `(a, b)`, or `None` when it
 /// traverses the edge from `b` to `a` (or does not contain it).
-fn starting_with(tri: [u32; 3], a: u32, b: u32) -> Option<[u32; 3]> {
+pub(crate) fn starting_with(tri: [u32; 3], a: u32, b: u32) -> Option<[u32; 3]> {
     (0..3)
         .map(|k| [tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]])
         .find(|r| r[0] == a && r[1] == b)

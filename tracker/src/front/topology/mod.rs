@@ -5,6 +5,7 @@
 //! closed, label-consistent and intersection-free.
 
 pub mod degenerate;
+pub mod merge;
 pub mod region_graph;
 pub mod regions;
 pub mod separate;
