@@ -219,6 +219,9 @@ fn frame_line(
         "cells": stats.cells,
         "interface_cells": stats.interface_cells,
     });
+    if let Some(n) = tracker.region_count() {
+        line["regions"] = json!(n);
+    }
     if !stats.events.is_empty() {
         let events: BTreeMap<&str, usize> = stats.events.iter().copied().collect();
         line["events"] = json!(events);

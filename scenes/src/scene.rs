@@ -501,11 +501,11 @@ fn compile_mesh_flow(
             seed,
             speeds: s,
         } => MeshFlow::NoiseAndNormal {
-            noise: CurlNoise::new(
+            noise: Box::new(CurlNoise::new(
                 positive(*amplitude, "velocity.amplitude", bad)?,
                 positive(*scale, "velocity.scale", bad)?,
                 *seed,
-            ),
+            )),
             speeds: speeds(s)?,
         },
         _ => return Ok(None),

@@ -97,6 +97,11 @@ pub trait InterfaceTracker: Send + Sync {
     }
     /// Volume of each phase enclosed by the current mesh.
     fn phase_volumes(&self) -> Vec<f64>;
+    /// Number of connected regions (a tracker that tracks them: the front tracker, whose
+    /// topology changes create and remove them); `None` by default.
+    fn region_count(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// A boxed tracker is a tracker: the run loops hold whichever kind the scene asked for.
@@ -135,6 +140,9 @@ impl<T: InterfaceTracker + ?Sized> InterfaceTracker for Box<T> {
     }
     fn phase_volumes(&self) -> Vec<f64> {
         (**self).phase_volumes()
+    }
+    fn region_count(&self) -> Option<usize> {
+        (**self).region_count()
     }
 }
 

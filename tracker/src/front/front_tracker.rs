@@ -21,6 +21,7 @@ use super::intersection::self_intersections;
 use super::params::{FrontParams, Integrator};
 use super::remesh::{improve, RemeshStats};
 use super::response::{resolve, CollisionParams};
+use super::topology::regions::regions;
 use crate::contour::PhaseSampler;
 use crate::contour_tracker::ContourTracker;
 use crate::invariants::{check, InvariantError};
@@ -180,7 +181,7 @@ impl FrontTracker {
     }
 
     /// Moves the mesh by `flow` from now on: `advance` then ignores its velocity field and
-    /// takes as many substeps as the flow's stability and the travel limit need.
+    /// takes as many substeps as the travel limit needs.
     pub fn set_flow(&mut self, flow: MeshFlow) {
         self.flow = Some(flow);
     }
@@ -191,35 +192,40 @@ impl FrontTracker {
         let mut done = 0.0;
         let mut remesh = RemeshStats::default();
         while done < dt {
-            let step = flow.step(&self.c, self.flow_steps);
-            let speed = match &step {
-                FlowStep::Vertices(v) => v.iter().map(|v| v.length()).fold(0.0, f64::max),
-                FlowStep::Field(noise) => noise.max_speed(),
-            };
-            let limit = (self.params.cfl * self.target / speed)
-                .min(flow.stable_dt(shortest_edge(&self.c).unwrap_or(self.target)));
-            // The last substep takes what is left; a remainder below a thousandth of the
-            // limit joins the substep before it, so no vanishing substep is taken.
-            let h = if dt - done <= 1.001 * limit {
-                dt - done
-            } else {
-                limit
-            };
+            let fixed = self.fixed_coordinates();
+            // The travel limit: at most `cfl` target lengths per substep. The implicit flow's
+            // velocities depend on the substep, so it is chosen again until it fits.
+            let mut h = dt - done;
+            let mut step = flow.step(&self.c, self.flow_steps, h, &fixed);
+            for _ in 0..8 {
+                let speed = match &step {
+                    FlowStep::Vertices(v) => v.iter().map(|v| v.length()).fold(0.0, f64::max),
+                    FlowStep::Field(noise) => noise.max_speed(),
+                };
+                let limit = flow.travel_fraction() * self.params.cfl * self.target / speed;
+                // A remainder within a thousandth of the limit is taken whole, so no
+                // vanishing substep follows.
+                if h <= 1.001 * limit {
+                    break;
+                }
+                h = limit;
+                step = flow.step(&self.c, self.flow_steps, h, &fixed);
+            }
             match &step {
                 FlowStep::Vertices(v) => self.move_safely(Motion::Vertices(v), t + done, h, 0)?,
                 FlowStep::Field(noise) => {
                     self.move_safely(Motion::Field(*noise), t + done, h, 0)?
                 }
             }
+            let merged = if flow.merges() {
+                self.merge()
+            } else {
+                TopologyCounts::default()
+            };
             let stats = improve(&mut self.c, &self.params, self.target);
             remesh = remesh.plus(&stats);
-            let rule = if flow.separates_by_area() {
-                T1Rule::Area(flow)
-            } else {
-                T1Rule::Off
-            };
-            let counts = self.topology(rule);
-            self.report.topology = self.report.topology.plus(&counts);
+            let separated = self.separate(T1Rule::Area(flow));
+            self.report.topology = self.report.topology.plus(&merged).plus(&separated);
             self.flow_steps += 1;
             self.report.flow_substeps += 1;
             done += h;
@@ -276,6 +282,29 @@ impl FrontTracker {
             });
         }
         Ok(self.constrain(x0, x1))
+    }
+
+    /// Per vertex, the coordinates [`Self::constrain`] holds: all three for a vertex only on
+    /// domain boundary faces, the plane's normal coordinate for one sliding on a wall.
+    fn fixed_coordinates(&self) -> Vec<[bool; 3]> {
+        let n = self.c.mesh.vertices.len();
+        let Some((lo, hi)) = self.domain else {
+            return vec![[false; 3]; n];
+        };
+        let tol = 1e-9 * (hi - lo).max_element();
+        (0..n as u32)
+            .map(|v| {
+                let tris = self.c.vertex_triangles(v);
+                if !tris.iter().any(|&t| self.c.labels(t).contains(&OUTSIDE)) {
+                    return [false; 3];
+                }
+                if tris.iter().all(|&t| self.c.labels(t).contains(&OUTSIDE)) {
+                    return [true; 3];
+                }
+                let x = self.c.position(v);
+                [0, 1, 2].map(|k| (x[k] - lo[k]).abs() <= tol || (x[k] - hi[k]).abs() <= tol)
+            })
+            .collect()
     }
 
     /// Keeps the domain boundary in place: vertices only on boundary faces stay, vertices
@@ -350,18 +379,6 @@ fn mean_interface_edge(mesh: &LabeledMesh) -> Option<f64> {
     (n > 0).then(|| sum / n as f64)
 }
 
-/// Length of the shortest edge of a live interface triangle.
-fn shortest_edge(c: &Connectivity) -> Option<f64> {
-    c.mesh
-        .triangles
-        .iter()
-        .zip(&c.mesh.labels)
-        .filter(|(t, l)| **t != super::connectivity::DEAD && !l.contains(&OUTSIDE))
-        .flat_map(|(&[a, b, d], _)| [[a, b], [b, d], [d, a]])
-        .map(|[a, b]| (c.position(a) - c.position(b)).length())
-        .reduce(f64::min)
-}
-
 /// Bounding box of the vertices of the domain boundary faces.
 fn domain_box(mesh: &LabeledMesh) -> Option<(DVec3, DVec3)> {
     mesh.triangles
@@ -391,8 +408,10 @@ impl InterfaceTracker for FrontTracker {
             moved?;
         } else {
             self.move_safely(Motion::Field(velocity), t, dt, 0)?;
+            let merged = self.merge();
             self.report.remesh = improve(&mut self.c, &self.params, self.target);
-            self.report.topology = self.topology(T1Rule::Field(velocity, t + dt));
+            let separated = self.separate(T1Rule::Field(velocity, t + dt));
+            self.report.topology = merged.plus(&separated);
         }
         let remesh = t1.elapsed().as_secs_f64() - self.seconds[0] - self.seconds[1];
         self.query = OnceLock::new();
@@ -404,8 +423,11 @@ impl InterfaceTracker for FrontTracker {
             ],
             events: vec![
                 ("flow_substeps", self.report.flow_substeps),
+                ("merge_snaps", self.report.topology.snaps),
                 ("t1_collapses", self.report.topology.junction_collapses),
                 ("t1_separations", self.report.topology.separations),
+                ("t2_degenerate", self.report.topology.degenerate),
+                ("t2_regions", self.report.topology.vanished),
             ],
             ..StepStats::default()
         })
@@ -426,6 +448,11 @@ impl InterfaceTracker for FrontTracker {
 
     fn mesh(&self) -> &LabeledMesh {
         &self.c.mesh
+    }
+
+    /// With no interface left, the background fills the domain: one region.
+    fn region_count(&self) -> Option<usize> {
+        Some(regions(&self.c).len().max(1))
     }
 
     fn phase_volumes(&self) -> Vec<f64> {

@@ -62,6 +62,13 @@ pub struct FrontParams {
     /// Greatest number of times a step's motion is halved when collision resolution fails
     /// before the unresolvable part of the motion is dropped (default 4).
     pub max_substep_depth: u32,
+    /// Surfaces closer than `merge_distance * L` are snapped together (paper 000 §6.2, whose
+    /// threshold is the user's): liquids that meet merge, different ones get an interface
+    /// (default 0.3; 0 turns merging off).
+    pub merge_distance: f64,
+    /// Regions smaller than `min_region_volume * L³` are removed, their space given to their
+    /// neighbours (a T2 process, §5.2; default 0.125, a cube of half the edge length).
+    pub min_region_volume: f64,
 }
 
 impl Default for FrontParams {
@@ -81,6 +88,8 @@ impl Default for FrontParams {
             smoothing_passes: 1,
             integrator: Integrator::Rk4,
             max_substep_depth: 4,
+            merge_distance: 0.3,
+            min_region_volume: 0.125,
         }
     }
 }
@@ -110,6 +119,14 @@ impl FrontParams {
         }
         if !(0.0 < p.feature_angle && p.feature_angle < 180.0 && 0.0 <= p.poor_angle) {
             return bad("need 0 < feature_angle < 180 and poor_angle >= 0");
+        }
+        // A merge distance near L would let a surface snap onto its own neighbouring faces
+        // beyond the adjacent-triangle fold rule of §6.2.
+        if !(0.0..=0.5).contains(&p.merge_distance) {
+            return bad("need 0 <= merge_distance <= 0.5");
+        }
+        if !(p.min_region_volume >= 0.0 && p.min_region_volume.is_finite()) {
+            return bad("min_region_volume must not be negative");
         }
         Ok(())
     }

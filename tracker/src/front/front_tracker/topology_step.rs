@@ -1,23 +1,26 @@
-//! The topology part of a front-tracker step (paper 000 Algorithm 1 after collision
-//! resolution and mesh improvement): T1 processes — collapses that bring two non-manifold
-//! curves together where the flow shortens the edge between them (§5.1.7), then vertex
-//! separation of every irregular vertex (§5.1.4–5.1.6, Algorithm 2).
+//! The topology parts of a front-tracker step (paper 000 Algorithm 1): merging after
+//! collision resolution (§6.2), and after mesh improvement the T1 processes — collapses that
+//! bring two non-manifold curves together where the flow shortens the edge between them
+//! (§5.1.7), then vertex separation of every irregular vertex (§5.1.4–5.1.6, Algorithm 2) —
+//! and the T2 processes (coincident pairs and regions too small to keep, §5.2).
 
 use glam::DVec3;
 use polyphase_grid::VelocityField;
 
 use super::FrontTracker;
-use crate::front::flow::{FlowStep, MeshFlow};
+use crate::front::flow::MeshFlow;
+use crate::front::topology::degenerate::remove_degenerate_pairs;
+use crate::front::topology::merge::merge_pass;
 use crate::front::topology::separate::{
     collapse_junction_edges, separate_vertices, SeparationStrength,
 };
+use crate::front::topology::vanish::remove_small_regions;
 
 /// How a step scores T1 processes.
 pub(super) enum T1Rule<'a> {
-    /// No T1 processes: the paper gives normal flows no separation rule (§5.1.6).
-    Off,
-    /// Mean-curvature flow: separations that lower the area, collapses where the flow's own
-    /// vertex velocities shorten the edge.
+    /// A mesh-driven flow: for mean-curvature flow, separations that lower the area and
+    /// collapses where the flow's own vertex velocities shorten the edge; none for the
+    /// others.
     Area(&'a MeshFlow),
     /// A prescribed velocity field at the end of the step.
     Field(&'a dyn VelocityField, f64),
@@ -26,30 +29,66 @@ pub(super) enum T1Rule<'a> {
 /// Counts of one step's topology changes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TopologyCounts {
+    /// Vertex pairs snapped together by merging.
+    pub snaps: usize,
     /// Collapses that joined two non-manifold curves (the start of a T1).
     pub junction_collapses: usize,
     /// Vertex separations (the end of a T1).
     pub separations: usize,
+    /// Coincident triangle pairs removed or relabeled (§5.2, Fig. 14), merging's included.
+    pub degenerate: usize,
+    /// Regions removed for being too small (T2).
+    pub vanished: usize,
 }
 
 impl TopologyCounts {
     /// The counts of two steps together.
     pub fn plus(&self, o: &TopologyCounts) -> TopologyCounts {
         TopologyCounts {
+            snaps: self.snaps + o.snaps,
             junction_collapses: self.junction_collapses + o.junction_collapses,
             separations: self.separations + o.separations,
+            degenerate: self.degenerate + o.degenerate,
+            vanished: self.vanished + o.vanished,
         }
     }
 }
 
 impl FrontTracker {
+    /// Snaps together surfaces within the merge distance (§6.2); the first topology stage,
+    /// right after the motion.
+    pub(super) fn merge(&mut self) -> TopologyCounts {
+        if self.params.merge_distance <= 0.0 {
+            return TopologyCounts::default();
+        }
+        let distance = self.params.merge_distance * self.target;
+        let stats = merge_pass(&mut self.c, &self.params, self.target, distance);
+        TopologyCounts {
+            snaps: stats.snaps,
+            degenerate: stats.degenerate,
+            ..TopologyCounts::default()
+        }
+    }
+
+    /// The T1 processes of `rule`, then the T2 processes, on the improved mesh.
+    pub(super) fn separate(&mut self, rule: T1Rule) -> TopologyCounts {
+        let mut counts = self.t1(rule);
+        counts.degenerate += remove_degenerate_pairs(&mut self.c);
+        let min_volume = self.params.min_region_volume * self.target.powi(3);
+        if min_volume > 0.0 {
+            counts.vanished =
+                remove_small_regions(&mut self.c, &self.params, self.target, min_volume);
+        }
+        self.c.compact();
+        counts
+    }
+
     /// Runs the T1 processes of `rule` on the current mesh.
-    pub(super) fn topology(&mut self, rule: T1Rule) -> TopologyCounts {
+    fn t1(&mut self, rule: T1Rule) -> TopologyCounts {
         let velocities: Vec<DVec3> = match rule {
-            T1Rule::Off => return TopologyCounts::default(),
-            T1Rule::Area(flow) => match flow.step(&self.c, 1) {
-                FlowStep::Vertices(v) => v,
-                FlowStep::Field(_) => return TopologyCounts::default(),
+            T1Rule::Area(flow) => match flow.area_gradient_velocities(&self.c) {
+                Some(v) => v,
+                None => return TopologyCounts::default(),
             },
             T1Rule::Field(field, t) => self
                 .c
@@ -74,6 +113,7 @@ impl FrontTracker {
         TopologyCounts {
             junction_collapses,
             separations,
+            ..TopologyCounts::default()
         }
     }
 }

@@ -126,7 +126,10 @@ impl<'a> Merger<'a> {
             return false;
         }
         let (pa, pb) = self.closest_points(&pair.a, &pair.b);
-        if pa.distance(pb) > self.distance || !self.fold_allows(&pair.a, &pair.b) {
+        if pa.distance(pb) > self.distance
+            || !self.fold_allows(&pair.a, &pair.b)
+            || !self.facing(&pair.a, &pair.b, pa, pb)
+        {
             return false;
         }
         let (a, pa) = self.reduce(pair.a, pa, pb);

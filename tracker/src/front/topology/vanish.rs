@@ -22,7 +22,7 @@ use polyphase_grid::OUTSIDE;
 use super::degenerate::remove_degenerate_pairs;
 use super::regions::{regions, Region};
 use crate::front::ccd::{edge_edge, vertex_triangle};
-use crate::front::connectivity::Connectivity;
+use crate::front::connectivity::{Connectivity, DEAD};
 use crate::front::params::FrontParams;
 
 /// Region vertices tried as targets after the region's centroid, nearest first.
@@ -74,7 +74,15 @@ pub fn remove_small_regions(
             if contract(c, &r.triangles, &bounds) {
                 remove_degenerate_pairs(c);
                 let after = regions(c);
-                if after.len() + 1 == all.len() {
+                // Removing the last interface leaves one phase filling the domain, which
+                // `regions` (a count over boundary shells) does not see: that is a drop by one
+                // from two.
+                let remaining = if c.mesh.triangles.iter().all(|&t| t == DEAD) {
+                    1
+                } else {
+                    after.len()
+                };
+                if remaining + 1 == all.len() {
                     next = Some(after);
                     break;
                 }

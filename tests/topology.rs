@@ -1,0 +1,75 @@
+//! Merging in the front tracker (paper 000 §6.2, §8.2), each scene run at low resolution with
+//! the exact intersection checker and the shared invariants after every step. The flows'
+//! analytic references and T2 extinction are the tracker crate's `front::flow` tests; the T1
+//! and T2 operations' own tests are in `front::topology`.
+
+mod common;
+
+use common::builtin_at;
+use polyphase_coupling::build_tracker;
+use polyphase_tracker::front::intersection::self_intersections;
+use polyphase_tracker::{invariants, InterfaceTracker, LabeledMesh};
+
+/// Runs built-in `name` at `resolution` for `frames` frames (all when `None`), checking after
+/// every step that the mesh is closed, label-consistent and intersection-free; returns the
+/// tracker and the region counts before and after.
+fn run(
+    name: &str,
+    resolution: i64,
+    frames: Option<usize>,
+) -> (Box<dyn InterfaceTracker>, usize, usize) {
+    let scene = builtin_at(name, resolution);
+    let (mut tracker, _) = build_tracker(&scene, None).expect("a valid start");
+    let regions_before = tracker
+        .region_count()
+        .expect("the front tracker counts regions");
+    let per_frame = scene.steps_per_frame(tracker.max_travel());
+    let total = per_frame * frames.unwrap_or(scene.file.time.frames as usize);
+    let dt = scene.frame_dt() / per_frame as f64;
+    for s in 0..total {
+        tracker
+            .advance(&scene.velocity, s as f64 * dt, dt)
+            .unwrap_or_else(|e| panic!("{name} step {s}: {e}"));
+        invariants::check(tracker.mesh(), 0.0).unwrap_or_else(|e| panic!("{name} step {s}: {e}"));
+        let hits = self_intersections(tracker.mesh());
+        assert!(hits.is_empty(), "{name} step {s}: {hits:?}");
+    }
+    let regions_after = tracker
+        .region_count()
+        .expect("the front tracker counts regions");
+    (tracker, regions_before, regions_after)
+}
+
+/// Vertices of the faces between phases `a` and `b`.
+fn interface_vertices(mesh: &LabeledMesh, a: u16, b: u16) -> Vec<glam::DVec3> {
+    mesh.triangles
+        .iter()
+        .zip(&mesh.labels)
+        .filter(|(_, l)| (l[0] == a && l[1] == b) || (l[0] == b && l[1] == a))
+        .flat_map(|(t, _)| t.map(|v| mesh.vertices[v as usize]))
+        .collect()
+}
+
+/// Paper 000 Fig. 15: two expanding spheres of different liquids meet; the interface the
+/// merge creates has speed 0, so it is a flat disk on the bisecting plane x = ½ (every vertex
+/// within half an edge length of it, the bound: snapping places a vertex at the
+/// midpoint of a pair at most the merge distance 0.3 L apart).
+#[test]
+fn merge2_makes_a_flat_interface_between_two_liquids() {
+    let resolution = 16;
+    let (tracker, _, _) = run("merge2", resolution, None);
+    let disk = interface_vertices(tracker.mesh(), 1, 2);
+    assert!(!disk.is_empty(), "no red–blue interface formed");
+    let l = 1.0 / resolution as f64;
+    let worst = disk.iter().map(|p| (p.x - 0.5).abs()).fold(0.0, f64::max);
+    assert!(worst <= 0.5 * l, "red–blue vertex {worst} from x = ½");
+}
+
+/// Two expanding spheres of one liquid merge with no layer of air left between them: the
+/// liquid is one region at the end (it was two), and the air is one region.
+#[test]
+fn merge_same_leaves_one_region_of_the_liquid() {
+    let (_, before, after) = run("merge_same", 16, None);
+    assert_eq!(before, 3, "two spheres in air");
+    assert_eq!(after, 2, "one merged liquid in air");
+}
