@@ -98,20 +98,10 @@ fn same_winding(a: [u32; 3], b: [u32; 3]) -> bool {
 mod tests {
     use super::*;
     use crate::front::intersection::self_intersections;
+    use crate::front::topology::clean;
     use crate::mesh::fixtures::{icosphere, push_oriented};
     use crate::mesh::LabeledMesh;
     use glam::DVec3;
-
-    /// Compacts a copy of `c` and asserts it is closed, label-consistent and
-    /// intersection-free; returns the compacted mesh.
-    fn clean(c: &Connectivity) -> LabeledMesh {
-        let mut d = c.clone();
-        d.compact();
-        crate::invariants::check(&d.mesh, 0.0).expect("closed and label-consistent");
-        let hits = self_intersections(&d.mesh);
-        assert!(hits.is_empty(), "intersections {hits:?}");
-        d.mesh
-    }
 
     /// Volumes of phases 0..3 agree to rounding of the tetra sums (unit-size meshes, sums of
     /// a few hundred terms of size <= 1: 1e-12 is far above their rounding).

@@ -297,19 +297,9 @@ mod tests {
 
     use super::*;
     use crate::front::intersection::self_intersections;
+    use crate::front::topology::clean;
     use crate::mesh::fixtures::{icosphere, lattice_mesh, push_oriented};
     use crate::mesh::LabeledMesh;
-
-    /// Compacts a copy of `c`, asserts it is closed, label-consistent and intersection-free,
-    /// and returns the compacted mesh.
-    fn clean(c: &Connectivity) -> LabeledMesh {
-        let mut d = c.clone();
-        d.compact();
-        crate::invariants::check(&d.mesh, 0.0).expect("closed and label-consistent");
-        let hits = self_intersections(&d.mesh);
-        assert!(hits.is_empty(), "intersections {hits:?}");
-        d.mesh
-    }
 
     /// Removes the regions below `min_volume` at target edge length `target`, checks the
     /// region count fell by the number removed and the mesh is clean, and returns
