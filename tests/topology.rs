@@ -57,7 +57,9 @@ fn interface_vertices(mesh: &LabeledMesh, a: u16, b: u16) -> Vec<glam::DVec3> {
 #[test]
 fn merge2_makes_a_flat_interface_between_two_liquids() {
     let resolution = 16;
-    let (tracker, _, _) = run("merge2", resolution, None);
+    let (tracker, before, after) = run("merge2", resolution, None);
+    // Red, blue and the air around them; no pocket of air is left between them.
+    assert_eq!((before, after), (3, 3));
     let disk = interface_vertices(tracker.mesh(), 1, 2);
     assert!(!disk.is_empty(), "no red–blue interface formed");
     let l = 1.0 / resolution as f64;

@@ -43,6 +43,10 @@ pub enum FrontError {
     InvalidParams(String),
 }
 
+/// Merge distance (in L) of mesh-driven flows that bring surfaces together, when the scene
+/// sets none ([`FrontParams::merge_distance`]).
+const MERGE_DISTANCE: f64 = 0.3;
+
 /// What the last step did, beyond the timings of [`StepStats`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrontStepReport {
@@ -80,8 +84,9 @@ pub struct FrontTracker {
     domain: Option<(DVec3, DVec3)>,
     query: OnceLock<MeshQuery>,
     report: FrontStepReport,
-    /// Seconds spent this step integrating trajectories and resolving collisions.
-    seconds: [f64; 2],
+    /// Seconds spent this step integrating trajectories, resolving collisions, merging and
+    /// in T1/T2 processes.
+    seconds: [f64; 4],
     /// Volume enclosed by domain boundary faces taken off the starting mesh
     /// ([`detach::detach_box`]); it belongs to the background phase.
     detached_volume: f64,
@@ -126,7 +131,7 @@ impl FrontTracker {
             domain,
             query: OnceLock::new(),
             report: FrontStepReport::default(),
-            seconds: [0.0; 2],
+            seconds: [0.0; 4],
             detached_volume: 0.0,
             flow: None,
             flow_steps: 0,
@@ -218,7 +223,7 @@ impl FrontTracker {
                 }
             }
             let merged = if flow.merges() {
-                self.merge()
+                self.merge(MERGE_DISTANCE)
             } else {
                 TopologyCounts::default()
             };
@@ -400,7 +405,7 @@ impl InterfaceTracker for FrontTracker {
         dt: f64,
     ) -> Result<StepStats, TrackerError> {
         self.report = FrontStepReport::default();
-        self.seconds = [0.0; 2];
+        self.seconds = [0.0; 4];
         let t1 = Instant::now();
         if let Some(flow) = self.flow.take() {
             let moved = self.advance_flow(&flow, t, dt);
@@ -408,18 +413,20 @@ impl InterfaceTracker for FrontTracker {
             moved?;
         } else {
             self.move_safely(Motion::Field(velocity), t, dt, 0)?;
-            let merged = self.merge();
+            let merged = self.merge(0.0);
             self.report.remesh = improve(&mut self.c, &self.params, self.target);
             let separated = self.separate(T1Rule::Field(velocity, t + dt));
             self.report.topology = merged.plus(&separated);
         }
-        let remesh = t1.elapsed().as_secs_f64() - self.seconds[0] - self.seconds[1];
+        let remesh = t1.elapsed().as_secs_f64() - self.seconds.iter().sum::<f64>();
         self.query = OnceLock::new();
         Ok(StepStats {
             stages: vec![
                 ("advect", self.seconds[0]),
                 ("collide", self.seconds[1]),
+                ("merge", self.seconds[2]),
                 ("remesh", remesh),
+                ("topology", self.seconds[3]),
             ],
             events: vec![
                 ("flow_substeps", self.report.flow_substeps),

@@ -4,6 +4,8 @@
 //! (§5.1.7), then vertex separation of every irregular vertex (§5.1.4–5.1.6, Algorithm 2) —
 //! and the T2 processes (coincident pairs and regions too small to keep, §5.2).
 
+use std::time::Instant;
+
 use glam::DVec3;
 use polyphase_grid::VelocityField;
 
@@ -56,13 +58,16 @@ impl TopologyCounts {
 
 impl FrontTracker {
     /// Snaps together surfaces within the merge distance (§6.2); the first topology stage,
-    /// right after the motion.
-    pub(super) fn merge(&mut self) -> TopologyCounts {
-        if self.params.merge_distance <= 0.0 {
+    /// right after the motion. `default` is the distance (in L) when the scene sets none.
+    pub(super) fn merge(&mut self, default: f64) -> TopologyCounts {
+        let fraction = self.params.merge_distance.unwrap_or(default);
+        if fraction <= 0.0 {
             return TopologyCounts::default();
         }
-        let distance = self.params.merge_distance * self.target;
+        let start = Instant::now();
+        let distance = fraction * self.target;
         let stats = merge_pass(&mut self.c, &self.params, self.target, distance);
+        self.seconds[2] += start.elapsed().as_secs_f64();
         TopologyCounts {
             snaps: stats.snaps,
             degenerate: stats.degenerate,
@@ -72,6 +77,7 @@ impl FrontTracker {
 
     /// The T1 processes of `rule`, then the T2 processes, on the improved mesh.
     pub(super) fn separate(&mut self, rule: T1Rule) -> TopologyCounts {
+        let start = Instant::now();
         let mut counts = self.t1(rule);
         counts.degenerate += remove_degenerate_pairs(&mut self.c);
         let min_volume = self.params.min_region_volume * self.target.powi(3);
@@ -80,6 +86,7 @@ impl FrontTracker {
                 remove_small_regions(&mut self.c, &self.params, self.target, min_volume);
         }
         self.c.compact();
+        self.seconds[3] += start.elapsed().as_secs_f64();
         counts
     }
 
