@@ -46,7 +46,8 @@ pub enum MeshFlow {
 
 /// What one substep of a flow does.
 pub enum FlowStep<'a> {
-    /// Every vertex moves at its own velocity, held over the substep (explicit Euler).
+    /// Every vertex moves at its own velocity, held over the substep (for the implicit
+    /// mean-curvature flow, its displacement over the substep divided by the substep).
     Vertices(Vec<DVec3>),
     /// The vertices follow a velocity field (integrated like a passive run's).
     Field(&'a CurlNoise),
