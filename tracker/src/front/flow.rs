@@ -104,6 +104,16 @@ impl MeshFlow {
     }
 }
 
+/// The interface triangles around vertex `v` (domain walls, `OUTSIDE` faces, left out) as
+/// (labels, area normal): what every flow reads of a vertex's neighbourhood.
+fn interface_faces(c: &Connectivity, v: u32) -> impl Iterator<Item = ([PhaseId; 2], DVec3)> + '_ {
+    c.vertex_triangles(v)
+        .iter()
+        .map(|&t| (c.labels(t), c.triangle(t).map(|i| c.position(i))))
+        .filter(|(labels, _)| !labels.contains(&polyphase_grid::OUTSIDE))
+        .map(|(labels, [a, b, d])| (labels, (b - a).cross(d - a)))
+}
+
 /// Speed of the interface of triangle labels `[front, back]` along the triangle's normal
 /// (which points into `front`): positive when it moves toward `front`.
 fn normal_speed(speeds: &[PairSpeed], [front, back]: [PhaseId; 2]) -> f64 {

@@ -4,10 +4,10 @@
 //! curve), the vertex takes the area-weighted mean of their motions.
 
 use glam::DVec3;
-use polyphase_grid::{PhaseId, OUTSIDE};
+use polyphase_grid::PhaseId;
 use rayon::prelude::*;
 
-use super::{normal_speed, PairSpeed};
+use super::{interface_faces, normal_speed, PairSpeed};
 use crate::front::connectivity::Connectivity;
 
 /// Velocity of every vertex (zero for unused vertices and those only on domain walls).
@@ -21,13 +21,7 @@ pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed]) -> Vec<DVec3> {
 fn vertex_velocity(c: &Connectivity, speeds: &[PairSpeed], v: u32) -> DVec3 {
     // Per unordered pair: (pair, Σ speed × area normal, Σ area, |speed|).
     let mut sheets: Vec<([PhaseId; 2], DVec3, f64, f64)> = Vec::new();
-    for &t in c.vertex_triangles(v) {
-        let labels = c.labels(t);
-        if labels.contains(&OUTSIDE) {
-            continue;
-        }
-        let [a, b, d] = c.triangle(t).map(|i| c.position(i));
-        let area_normal = (b - a).cross(d - a);
+    for (labels, area_normal) in interface_faces(c, v) {
         let s = normal_speed(speeds, labels);
         let key = [labels[0].min(labels[1]), labels[0].max(labels[1])];
         let area = 0.5 * area_normal.length();

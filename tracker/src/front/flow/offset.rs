@@ -8,10 +8,9 @@
 
 use glam::DVec3;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
-use polyphase_grid::OUTSIDE;
 use rayon::prelude::*;
 
-use super::{normal_speed, PairSpeed};
+use super::{interface_faces, normal_speed, PairSpeed};
 use crate::front::connectivity::Connectivity;
 
 /// Eigenvalues below this fraction of the largest are the quadric's null space: two sheets
@@ -26,13 +25,7 @@ pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed]) -> Vec<DVec3> {
         .map(|v| {
             let mut quadric = Matrix3::<f64>::zeros();
             let mut rhs = Vector3::<f64>::zeros();
-            for &t in c.vertex_triangles(v) {
-                let labels = c.labels(t);
-                if labels.contains(&OUTSIDE) {
-                    continue;
-                }
-                let [a, b, d] = c.triangle(t).map(|i| c.position(i));
-                let area_normal = (b - a).cross(d - a);
+            for (labels, area_normal) in interface_faces(c, v) {
                 let area = 0.5 * area_normal.length();
                 let n = area_normal.normalize_or_zero();
                 let n = Vector3::new(n.x, n.y, n.z);

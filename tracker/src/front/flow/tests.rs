@@ -115,18 +115,17 @@ fn curl_noise_is_divergence_free_and_bounded() {
             (noise.velocity(x + a * e, 0.0) - noise.velocity(x - a * e, 0.0)) / (2.0 * e)
         };
         let div = d(DVec3::X).x + d(DVec3::Y).y + d(DVec3::Z).z;
-        // Central differences of a field of wavelength 0.5: truncation ~ (2πe/0.5)² ~ 2e-8.
-        assert!(
-            div.abs() < 1e-6 * 0.3 / 0.5 * 10.0,
-            "divergence {div} at {x}"
-        );
+        // Each derivative is of size amplitude·k ≈ 3.8 (k = 2π/0.5); central differences
+        // leave (k·e)²/6 ≈ 7e-8 of it and rounding ~1e-16·0.3/e ≈ 3e-12, so 1e-6 of the
+        // derivatives' size is far above both and far below a divergent field's.
+        let k = 2.0 * std::f64::consts::PI / 0.5;
+        assert!(div.abs() < 1e-6 * 0.3 * k, "divergence {div} at {x}");
         assert!(noise.velocity(x, 0.0).length() <= noise.max_speed());
     }
 }
 
 /// Mean-curvature flow of a sphere to extinction: r² = r0² − 4t gives t = r0²/4 (measured
-/// +0.5 %); the sphere
-/// goes as one region when its volume falls below the T2 bound (a cube of half an edge
+/// +0.5 %); the sphere goes as one region when its volume falls below the T2 bound (a cube of half an edge
 /// length, then ~1e-4 of its start), the region count dropping by exactly one. Within 2 % of
 /// the extinction time (the bound; the radius at 60 % of it is within 1 %).
 #[test]
