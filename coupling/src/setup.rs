@@ -59,32 +59,51 @@ pub fn build_tracker(
             tracker.set_max_travel(scene.file.time.cfl * scene.grid.h);
             Ok((Box::new(tracker), StepStats::default()))
         }
-        (TrackerKind::Front, None) => {
+        (TrackerKind::Front, snapshot) => {
             let started = Instant::now();
             let params = scene.file.tracker.front.clone().unwrap_or_default();
-            let mut tracker =
-                FrontTracker::from_sampler(scene.grid, &initial, n_phases, background, params)
-                    .map_err(|e| {
-                        CouplingError::Invalid(format!(
-                            "{}: starting the front tracker: {e}",
-                            scene.file.name
-                        ))
-                    })?;
+            let restoring = snapshot.is_some();
+            let built = match snapshot {
+                None => {
+                    FrontTracker::from_sampler(scene.grid, &initial, n_phases, background, params)
+                }
+                Some(TrackerSnapshot::Front(state)) => {
+                    FrontTracker::from_state(state, n_phases, background, params)
+                }
+                Some(TrackerSnapshot::Contour { .. }) => {
+                    return Err(other_kind(scene, "a contouring", "the front"))
+                }
+            };
+            let mut tracker = built.map_err(|e| {
+                CouplingError::Invalid(format!(
+                    "{}: starting the front tracker: {e}",
+                    scene.file.name
+                ))
+            })?;
             if let Some(flow) = &scene.mesh_flow {
                 tracker.set_flow(flow.clone());
             }
-            let first = StepStats {
-                stages: vec![("build", started.elapsed().as_secs_f64())],
-                ..StepStats::default()
+            let first = match restoring {
+                true => StepStats::default(),
+                false => StepStats {
+                    stages: vec![("build", started.elapsed().as_secs_f64())],
+                    ..StepStats::default()
+                },
             };
             Ok((Box::new(tracker), first))
         }
-        (TrackerKind::Front, Some(_)) => Err(CouplingError::Invalid(format!(
-            "{}: the checkpoint holds a contouring tracker, but the scene asks for the front \
-             tracker",
-            scene.file.name
-        ))),
+        (TrackerKind::Contour, Some(TrackerSnapshot::Front(_))) => {
+            Err(other_kind(scene, "a front", "the contouring"))
+        }
     }
+}
+
+/// The error of a checkpoint that holds `held` tracker for a scene that asks for `asked`.
+fn other_kind(scene: &Scene, held: &str, asked: &str) -> CouplingError {
+    CouplingError::Invalid(format!(
+        "{}: the checkpoint holds {held} tracker, but the scene asks for {asked} tracker",
+        scene.file.name
+    ))
 }
 
 /// Solver (the scene's boundaries, a free-slip closed box by default, at the scene's solver

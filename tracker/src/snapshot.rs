@@ -2,6 +2,7 @@
 //! bit. Each tracker that can be checkpointed has its own variant.
 
 use crate::contour::MdTree;
+use crate::front::front_tracker::FrontState;
 use crate::mesh::LabeledMesh;
 
 /// Everything a tracker needs to continue exactly where it stopped.
@@ -17,6 +18,9 @@ pub enum TrackerSnapshot {
         component_targets: Vec<f64>,
         carried_loss: Vec<f64>,
     },
+    /// The front tracker: its mesh, target edge length, domain box, flow substep count and
+    /// the rest of [`FrontState`].
+    Front(FrontState),
 }
 
 impl TrackerSnapshot {
@@ -24,6 +28,7 @@ impl TrackerSnapshot {
     pub fn mesh(&self) -> &LabeledMesh {
         match self {
             TrackerSnapshot::Contour { mesh, .. } => mesh,
+            TrackerSnapshot::Front(state) => &state.mesh,
         }
     }
 }

@@ -12,6 +12,7 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 use self::detach::detach_box;
+pub use self::snapshot::FrontState;
 use self::topology_step::T1Rule;
 pub use self::topology_step::TopologyCounts;
 use self::untangle::untangle;
@@ -27,6 +28,7 @@ use crate::contour_tracker::ContourTracker;
 use crate::invariants::{check, InvariantError};
 use crate::mesh::LabeledMesh;
 use crate::query::MeshQuery;
+use crate::snapshot::TrackerSnapshot;
 use crate::tracker::{InterfaceTracker, StepStats, TrackerError};
 
 /// Why a front tracker could not be built.
@@ -457,6 +459,10 @@ impl InterfaceTracker for FrontTracker {
         &self.c.mesh
     }
 
+    fn snapshot(&self) -> Option<TrackerSnapshot> {
+        Some(TrackerSnapshot::Front(self.state()))
+    }
+
     /// With no interface left, the background fills the domain: one region.
     fn region_count(&self) -> Option<usize> {
         Some(regions(&self.c).len().max(1))
@@ -472,6 +478,7 @@ impl InterfaceTracker for FrontTracker {
 }
 
 mod detach;
+mod snapshot;
 mod topology_step;
 mod untangle;
 
