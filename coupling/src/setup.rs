@@ -225,4 +225,36 @@ mod tests {
             assert_eq!(restored.max_travel(), 2.5 * h, "{name}, from a checkpoint");
         }
     }
+
+    /// `enright` at 8³ with the given tracker.
+    fn small_enright(tracker: &str) -> Scene {
+        let (_, text) = polyphase_scenes::BUILTIN
+            .iter()
+            .find(|(n, _)| *n == "enright")
+            .expect("built-in");
+        let text = text.replacen(
+            "resolution = 64\n",
+            &format!("resolution = 8\ntracker = \"{tracker}\"\n"),
+            1,
+        );
+        Scene::parse(&text, "enright").expect("valid")
+    }
+
+    #[test]
+    fn a_front_tracker_restores_and_a_snapshot_of_the_other_kind_is_refused() {
+        let (contour, front) = (small_enright("contour"), small_enright("front"));
+        let (fresh, _) = build_tracker(&front, None).expect("built");
+        let (restored, first) = build_tracker(&front, fresh.snapshot()).expect("restored");
+        assert_eq!(restored.mesh(), fresh.mesh());
+        assert_eq!(restored.max_travel(), fresh.max_travel());
+        assert!(first.stages.is_empty(), "a restore builds nothing");
+
+        let refused = |scene: &Scene, snapshot, held: &str| {
+            let err = build_tracker(scene, snapshot).err().expect("refused");
+            assert!(err.to_string().contains(held), "{err}");
+        };
+        refused(&contour, fresh.snapshot(), "holds a front tracker");
+        let contour_snapshot = build_tracker(&contour, None).expect("built").0.snapshot();
+        refused(&front, contour_snapshot, "holds a contouring tracker");
+    }
 }
