@@ -1,5 +1,5 @@
 //! Passive runs: a scene's analytic velocity moves the interfaces, frame by frame, with the
-//! tracker the scene asks for. Runs of a tracker that has a snapshot (the contouring tracker)
+//! tracker the scene asks for. Runs of a tracker that has a snapshot (both trackers have one)
 //! write a checkpoint at every frame end (`polyphase resume`).
 
 use std::collections::BTreeMap;
