@@ -5,40 +5,8 @@
 
 mod common;
 
-use common::builtin_at;
-use polyphase_coupling::build_tracker;
-use polyphase_tracker::front::intersection::self_intersections;
-use polyphase_tracker::{invariants, InterfaceTracker, LabeledMesh};
-
-/// Runs built-in `name` at `resolution` for `frames` frames (all when `None`), checking after
-/// every step that the mesh is closed, label-consistent and intersection-free; returns the
-/// tracker and the region counts before and after.
-fn run(
-    name: &str,
-    resolution: i64,
-    frames: Option<usize>,
-) -> (Box<dyn InterfaceTracker>, usize, usize) {
-    let scene = builtin_at(name, resolution);
-    let (mut tracker, _) = build_tracker(&scene, None).expect("a valid start");
-    let regions_before = tracker
-        .region_count()
-        .expect("the front tracker counts regions");
-    let per_frame = scene.steps_per_frame(tracker.max_travel());
-    let total = per_frame * frames.unwrap_or(scene.file.time.frames as usize);
-    let dt = scene.frame_dt() / per_frame as f64;
-    for s in 0..total {
-        tracker
-            .advance(&scene.velocity, s as f64 * dt, dt)
-            .unwrap_or_else(|e| panic!("{name} step {s}: {e}"));
-        invariants::check(tracker.mesh(), 0.0).unwrap_or_else(|e| panic!("{name} step {s}: {e}"));
-        let hits = self_intersections(tracker.mesh());
-        assert!(hits.is_empty(), "{name} step {s}: {hits:?}");
-    }
-    let regions_after = tracker
-        .region_count()
-        .expect("the front tracker counts regions");
-    (tracker, regions_before, regions_after)
-}
+use common::run_checked as run;
+use polyphase_tracker::LabeledMesh;
 
 /// Vertices of the faces between phases `a` and `b`.
 fn interface_vertices(mesh: &LabeledMesh, a: u16, b: u16) -> Vec<glam::DVec3> {
@@ -75,3 +43,4 @@ fn merge_same_leaves_one_region_of_the_liquid() {
     assert_eq!(before, 3, "two spheres in air");
     assert_eq!(after, 2, "one merged liquid in air");
 }
+
