@@ -1,44 +1,13 @@
-//! Merging in the front tracker (paper 000 §6.2, §8.2), each scene run at low resolution with
-//! the exact intersection checker and the shared invariants after every step. The flows'
+//! Merging in the front tracker (paper 000 §6.2, §8.2) and the cyclic normal flow (Fig. 23),
+//! each scene run at low resolution with the exact intersection checker and the shared
+//! invariants after every step. The flows'
 //! analytic references and T2 extinction are the tracker crate's `front::flow` tests; the T1
 //! and T2 operations' own tests are in `front::topology`.
 
 mod common;
 
-use common::builtin_at;
-use polyphase_coupling::build_tracker;
-use polyphase_tracker::front::intersection::self_intersections;
-use polyphase_tracker::{invariants, InterfaceTracker, LabeledMesh};
-
-/// Runs built-in `name` at `resolution` for `frames` frames (all when `None`), checking after
-/// every step that the mesh is closed, label-consistent and intersection-free; returns the
-/// tracker and the region counts before and after.
-fn run(
-    name: &str,
-    resolution: i64,
-    frames: Option<usize>,
-) -> (Box<dyn InterfaceTracker>, usize, usize) {
-    let scene = builtin_at(name, resolution);
-    let (mut tracker, _) = build_tracker(&scene, None).expect("a valid start");
-    let regions_before = tracker
-        .region_count()
-        .expect("the front tracker counts regions");
-    let per_frame = scene.steps_per_frame(tracker.max_travel());
-    let total = per_frame * frames.unwrap_or(scene.file.time.frames as usize);
-    let dt = scene.frame_dt() / per_frame as f64;
-    for s in 0..total {
-        tracker
-            .advance(&scene.velocity, s as f64 * dt, dt)
-            .unwrap_or_else(|e| panic!("{name} step {s}: {e}"));
-        invariants::check(tracker.mesh(), 0.0).unwrap_or_else(|e| panic!("{name} step {s}: {e}"));
-        let hits = self_intersections(tracker.mesh());
-        assert!(hits.is_empty(), "{name} step {s}: {hits:?}");
-    }
-    let regions_after = tracker
-        .region_count()
-        .expect("the front tracker counts regions");
-    (tracker, regions_before, regions_after)
-}
+use common::run_checked as run;
+use polyphase_tracker::LabeledMesh;
 
 /// Vertices of the faces between phases `a` and `b`.
 fn interface_vertices(mesh: &LabeledMesh, a: u16, b: u16) -> Vec<glam::DVec3> {
@@ -74,4 +43,13 @@ fn merge_same_leaves_one_region_of_the_liquid() {
     let (_, before, after) = run("merge_same", 16, None);
     assert_eq!(before, 3, "two spheres in air");
     assert_eq!(after, 2, "one merged liquid in air");
+}
+
+/// Paper 000 Fig. 23: cyclic face-offsetting normal flow curls the material around the triple
+/// curve; the first frames stay closed, label-consistent and intersection-free, and no region
+/// is created or lost.
+#[test]
+fn cyclic_normal_flow_stays_valid() {
+    let (_, before, after) = run("cyclic", 16, Some(3));
+    assert_eq!((before, after), (3, 3));
 }

@@ -1,9 +1,14 @@
-//! Helpers shared by the end-to-end tests: run the binary, make scratch folders.
+//! Helpers shared by the end-to-end tests: run the binary, make scratch folders, run a
+//! built-in scene in process with the mesh checked after every step.
 // Each test file compiles this module on its own and uses only some of the helpers.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+use polyphase_coupling::build_tracker;
+use polyphase_tracker::front::intersection::self_intersections;
+use polyphase_tracker::{invariants, InterfaceTracker};
 
 /// Built-in scene `name` at tracker `resolution`.
 pub fn builtin_at(name: &str, resolution: i64) -> polyphase_scenes::Scene {
@@ -12,6 +17,36 @@ pub fn builtin_at(name: &str, resolution: i64) -> polyphase_scenes::Scene {
         .expect("valid")
         .with_overrides(Some(resolution), None)
         .expect("valid override")
+}
+
+/// Runs built-in `name` at `resolution` for `frames` frames (all when `None`), checking after
+/// every step that the mesh is closed, label-consistent and intersection-free; returns the
+/// tracker and the region counts before and after.
+pub fn run_checked(
+    name: &str,
+    resolution: i64,
+    frames: Option<usize>,
+) -> (Box<dyn InterfaceTracker>, usize, usize) {
+    let scene = builtin_at(name, resolution);
+    let (mut tracker, _) = build_tracker(&scene, None).expect("a valid start");
+    let regions_before = tracker
+        .region_count()
+        .expect("the front tracker counts regions");
+    let per_frame = scene.steps_per_frame(tracker.max_travel());
+    let total = per_frame * frames.unwrap_or(scene.file.time.frames as usize);
+    let dt = scene.frame_dt() / per_frame as f64;
+    for s in 0..total {
+        tracker
+            .advance(&scene.velocity, s as f64 * dt, dt)
+            .unwrap_or_else(|e| panic!("{name} step {s}: {e}"));
+        invariants::check(tracker.mesh(), 0.0).unwrap_or_else(|e| panic!("{name} step {s}: {e}"));
+        let hits = self_intersections(tracker.mesh());
+        assert!(hits.is_empty(), "{name} step {s}: {hits:?}");
+    }
+    let regions_after = tracker
+        .region_count()
+        .expect("the front tracker counts regions");
+    (tracker, regions_before, regions_after)
 }
 
 /// Runs the `polyphase` binary with `args`.

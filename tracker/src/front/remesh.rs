@@ -120,6 +120,10 @@ pub(crate) struct Remesher<'a> {
     /// §5.1.7: the collapse that starts a T1 process, allowed only where the flow shortens the
     /// edge; set by [`crate::front::topology::separate::collapse_junction_edges`]).
     pub(crate) junction: bool,
+    /// Collapses may leave coincident triangles: a region shrinking to nothing ends as such
+    /// pairs (paper 000 §5.2; set by [`crate::front::topology::vanish`], which resolves them
+    /// at once).
+    pub(crate) coincident: bool,
     /// Splits move the new vertex to its butterfly point ([`FrontParams::butterfly`]).
     butterfly: bool,
     pub(crate) stats: RemeshStats,
@@ -148,6 +152,7 @@ impl<'a> Remesher<'a> {
             x1,
             failsafe: false,
             junction: false,
+            coincident: false,
             butterfly: false,
             stats: RemeshStats::default(),
             #[cfg(test)]

@@ -99,7 +99,8 @@ impl Remesher<'_> {
         {
             return false;
         }
-        // Surviving triangles with `gone` renamed `keep`; none may duplicate another.
+        // Surviving triangles with `gone` renamed `keep`; none may duplicate another unless
+        // the caller resolves coincident pairs.
         let moved: Vec<u32> = self
             .c
             .vertex_triangles(gone)
@@ -124,7 +125,7 @@ impl Remesher<'_> {
             })
             .collect();
         keys.sort_unstable();
-        if keys.windows(2).any(|w| w[0] == w[1]) {
+        if !self.coincident && keys.windows(2).any(|w| w[0] == w[1]) {
             return false;
         }
         // Geometry before and after: every triangle around either end.

@@ -13,12 +13,17 @@
 //! over, domain-boundary faces stay in their planes, and exact CCD finds no collision of the
 //! motion (the merged vertices count as one, the vanishing triangles are left out, as for an
 //! edge collapse).
-//! The operation is atomic: when no target passes, or the region count would not drop by
+//! When no target passes, the region is shrunk by collapses of its own edges until it
+//! degenerates ([`shrink`]), as remeshing makes the paper's regions vanish.
+//! The operation is atomic: when neither way works, or the region count would not drop by
 //! exactly one, the mesh is restored.
 
 use glam::DVec3;
 use polyphase_grid::OUTSIDE;
 
+mod shrink;
+
+use self::shrink::shrink;
 use super::degenerate::remove_degenerate_pairs;
 use super::regions::{regions, Region};
 use crate::front::ccd::{edge_edge, vertex_triangle};
@@ -38,7 +43,8 @@ struct ShapeBounds {
 
 /// Removes the regions of `c` with volume below `min_volume`, smallest first, and returns how
 /// many were removed; each removal lowers the region count ([`regions`]) by exactly one.
-/// Coincident triangle pairs are resolved first. Regions whose contraction is refused stay.
+/// Coincident triangle pairs are resolved first. A region whose contraction is refused is
+/// shrunk by collapses of its edges instead ([`shrink`]); regions both refuse stay.
 /// Removed triangles leave tombstones ([`Connectivity::compact`] squeezes them out).
 /// Of the bounds of `params` at target edge length `target` only the minimum area is kept
 /// (a contraction leaving slivers would hand them to the fail-safe pass); the others are
@@ -74,20 +80,17 @@ pub fn remove_small_regions(
             if contract(c, &r.triangles, &bounds) {
                 remove_degenerate_pairs(c);
                 let after = regions(c);
-                // Removing the last interface leaves one phase filling the domain, which
-                // `regions` (a count over boundary shells) does not see: that is a drop by one
-                // from two.
-                let remaining = if c.mesh.triangles.iter().all(|&t| t == DEAD) {
-                    1
-                } else {
-                    after.len()
-                };
-                if remaining + 1 == all.len() {
+                if region_count(c, &after) + 1 == all.len() {
                     next = Some(after);
                     break;
                 }
                 *c = before.clone();
             }
+            if let Some(after) = shrink(c, params, target, r, &all, min_volume) {
+                next = Some(after);
+                break;
+            }
+            *c = before.clone();
         }
         match next {
             Some(after) => {
@@ -96,6 +99,17 @@ pub fn remove_small_regions(
             }
             None => return removed,
         }
+    }
+}
+
+/// The number of regions of `c` given its shells' regions `all`: removing the last interface
+/// leaves one phase filling the domain, which [`regions`] (a count over boundary shells) does
+/// not see, so that is one region, a drop by one from two.
+fn region_count(c: &Connectivity, all: &[Region]) -> usize {
+    if c.mesh.triangles.iter().all(|&t| t == DEAD) {
+        1
+    } else {
+        all.len()
     }
 }
 

@@ -1,0 +1,155 @@
+//! The T2 process by edge collapses (paper 000 §5.2, Fig. 13/14): a small region whose
+//! contraction to one point is refused (films beside it would turn over) is shrunk the way
+//! the paper's regions vanish, by remeshing: its edges are collapsed one at a time, shortest
+//! first, until it degenerates into coincident triangle pairs that
+//! [`remove_degenerate_pairs`] resolves. Each collapse is the remesher's, with its link
+//! condition, its fold rule (no triangle turns over) and its exact CCD check of the
+//! pseudo-motion; the other bounds are relaxed as in the fail-safe pass (Appendix A.4), and
+//! collapses may join different non-manifold curves, which a shrinking junction cell must.
+
+use polyphase_grid::{PhaseId, OUTSIDE};
+
+use super::{region_count, Region};
+use crate::front::connectivity::Connectivity;
+use crate::front::params::{Bounds, FrontParams};
+use crate::front::remesh::Remesher;
+use crate::front::topology::degenerate::remove_degenerate_pairs;
+use crate::front::topology::regions::regions;
+
+/// Collapses one region may take. A region below the T2 volume (a fraction of L³) has a few
+/// dozen edges at most, and every collapse removes one of its vertices.
+const MAX_COLLAPSES: usize = 256;
+
+/// Shrinks `region` (one of `all`, the regions of `c`; smaller than `min_volume`) by collapses
+/// of its edges until the region count drops by exactly one, and returns the regions then.
+/// `None` when a step finds no collapse that passes, leaves coincident triangles that do not
+/// resolve, makes another region smaller than `min_volume`, or changes the count otherwise (a
+/// split or a second region lost); `c` is then partly changed and the caller restores it.
+pub(super) fn shrink(
+    c: &mut Connectivity,
+    params: &FrontParams,
+    target: f64,
+    region: &Region,
+    all: &[Region],
+    min_volume: f64,
+) -> Option<Vec<Region>> {
+    let count = all.len();
+    let small_before = all.iter().filter(|r| r.volume < min_volume).count();
+    let phase = region.phase;
+    let mut triangles = region.triangles.clone();
+    for _ in 0..MAX_COLLAPSES {
+        let keep = collapse_shortest(c, params, target, &triangles)?;
+        remove_degenerate_pairs(c);
+        if has_coincident(c) {
+            return None;
+        }
+        let after = regions(c);
+        let n = region_count(c, &after);
+        // Collapses on edges the region shares with a small neighbour (a ball inside a thin
+        // shell) can eat that neighbour instead: no other region may become small.
+        let small = after.iter().filter(|r| r.volume < min_volume).count();
+        if n + 1 == count && small < small_before {
+            return Some(after);
+        }
+        if n != count || small > small_before {
+            return None;
+        }
+        let vertices = vertices_of(c, &triangles);
+        triangles = region_at(c, &after, phase, keep, &vertices)?
+            .triangles
+            .clone();
+    }
+    None
+}
+
+/// Collapses the shortest edge of `triangles` that passes the checks of the module doc and
+/// moves no vertex of a domain wall off its place; returns the vertex kept.
+fn collapse_shortest(
+    c: &mut Connectivity,
+    params: &FrontParams,
+    target: f64,
+    triangles: &[u32],
+) -> Option<u32> {
+    let mut edges: Vec<[u32; 2]> = triangles
+        .iter()
+        .flat_map(|&t| {
+            let [a, b, d] = c.triangle(t);
+            [[a, b], [b, d], [d, a]]
+        })
+        .map(|[a, b]| [a.min(b), a.max(b)])
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let length = |c: &Connectivity, [a, b]: [u32; 2]| (c.position(a) - c.position(b)).length();
+    let mut by_length: Vec<(f64, [u32; 2])> =
+        edges.into_iter().map(|e| (length(c, e), e)).collect();
+    by_length.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+    let mut r = Remesher::new(c, Bounds::new(params, target));
+    r.failsafe = true;
+    r.coincident = true;
+    for (_, [a, b]) in by_length {
+        let Some((keep, _, p)) = r.collapse_target(a, b) else {
+            continue;
+        };
+        let on_wall = |v: u32| {
+            r.c.vertex_triangles(v)
+                .iter()
+                .any(|&t| r.c.labels(t).contains(&OUTSIDE))
+        };
+        if [a, b].iter().any(|&v| on_wall(v) && r.c.position(v) != p) {
+            continue;
+        }
+        if r.try_collapse(a, b) {
+            return Some(keep);
+        }
+    }
+    None
+}
+
+/// Are two live triangles of `c` on the same three vertices?
+fn has_coincident(c: &Connectivity) -> bool {
+    let mut keys: Vec<[u32; 3]> = (0..c.mesh.triangles.len() as u32)
+        .filter(|&t| c.is_live(t))
+        .map(|t| {
+            let mut key = c.triangle(t);
+            key.sort_unstable();
+            key
+        })
+        .collect();
+    keys.sort_unstable();
+    keys.windows(2).any(|w| w[0] == w[1])
+}
+
+/// The vertices of live `triangles`, sorted.
+fn vertices_of(c: &Connectivity, triangles: &[u32]) -> Vec<u32> {
+    let mut v: Vec<u32> = triangles
+        .iter()
+        .filter(|&&t| c.is_live(t))
+        .flat_map(|&t| c.triangle(t))
+        .collect();
+    v.sort_unstable();
+    v.dedup();
+    v
+}
+
+/// The region of `phase` among `all` that the shrinking one became: the one with a triangle
+/// on `keep` (the vertex the last collapse kept), else the first with a triangle on one of
+/// `vertices` (the shrinking region's, when its triangles at `keep` went as coincident pairs).
+fn region_at<'a>(
+    c: &Connectivity,
+    all: &'a [Region],
+    phase: PhaseId,
+    keep: u32,
+    vertices: &[u32],
+) -> Option<&'a Region> {
+    let touches = |r: &Region, hit: &dyn Fn(u32) -> bool| {
+        r.phase == phase
+            && r.triangles
+                .iter()
+                .any(|&t| c.triangle(t).iter().any(|&v| hit(v)))
+    };
+    all.iter().find(|r| touches(r, &|v| v == keep)).or_else(|| {
+        all.iter()
+            .find(|r| touches(r, &|v| vertices.binary_search(&v).is_ok()))
+    })
+}
