@@ -79,8 +79,7 @@ pub fn resume(dir: &Path) -> Result<()> {
     let folder = RunFolder::open(dir);
     let checkpoint = folder.read_checkpoint()?.with_context(|| {
         format!(
-            "{} has no checkpoint: the run stopped before its first frame, or its tracker keeps \
-             none (only contouring-tracker runs can be resumed); start it again",
+            "{} has no checkpoint: the run stopped before its first frame; start it again",
             dir.display()
         )
     })?;

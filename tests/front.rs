@@ -198,7 +198,8 @@ fn front_on_a_coupled_scene_an_unknown_tracker_or_resume_is_one_clear_error() {
         );
         assert!(!out.exists(), "no output folder for a refused run");
     }
-    // Front runs keep no checkpoint, so `resume` refuses them by name.
+    // A front run keeps a checkpoint like a contouring run (`tests/resume.rs` resumes one), so
+    // `resume` on a finished one says it is finished.
     let out = dir.join("passive");
     let o = run_small("zalesak", 16, 1, &out, &["--tracker", "front"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -206,7 +207,7 @@ fn front_on_a_coupled_scene_an_unknown_tracker_or_resume_is_one_clear_error() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(
-        err.contains("only contouring-tracker runs can be resumed"),
+        err.contains("is finished (1 frames); nothing to resume"),
         "{err}"
     );
 }
