@@ -116,46 +116,46 @@ fn coupled_run_killed_twice_and_resumed_matches_uninterrupted_run() {
     assert_eq!(stats_without_timings(&a), stats_without_timings(&b));
 }
 
+/// Runs `scene` at `resolution` for `frames` frames into `DIR/a`; runs it again into `DIR/b`,
+/// killed once `kill_at` (a path in the run folder) exists, and resumes that; asserts the two
+/// wrote the same frames and the same stats lines (timings aside). Returns `DIR/b`'s stats.
+fn kill_resume_and_compare(
+    dir: &str,
+    scene: &str,
+    resolution: u32,
+    frames: u32,
+    kill_at: &str,
+) -> Vec<Value> {
+    let dir = scratch(dir);
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let o = run_small(scene, resolution, frames, &a, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (res, n) = (resolution.to_string(), frames.to_string());
+    let args = ["run", scene, "--resolution", &res, "--frames", &n];
+    run_and_kill(&args, &b, kill_at);
+    assert!(!b.join(format!("frames/{frames:04}.ply")).exists());
+    resume(&b, &[]);
+    assert_same_frames(&a, &b, frames as usize);
+    let stats = stats_without_timings(&b);
+    assert_eq!(stats_without_timings(&a), stats);
+    stats
+}
+
 #[test]
 fn passive_run_killed_mid_frame_and_resumed_matches_uninterrupted_run() {
-    let dir = scratch("resume_passive");
-    let (a, b) = (dir.join("a"), dir.join("b"));
     // circle3_rotate is periodic: its last frame line compares with the first mesh, which the
-    // resumed run has to rebuild.
-    let o = run_small("circle3_rotate", 32, 4, &a, &[]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let args = [
-        "run",
-        "circle3_rotate",
-        "--resolution",
-        "32",
-        "--frames",
-        "4",
-    ];
-    // The first checkpoint is written right after frame 0: the kill lands in frame 1.
-    run_and_kill(&args, &b, "checkpoint.bin");
-    assert!(!b.join("frames/0004.ply").exists());
-    resume(&b, &[]);
-    assert_same_frames(&a, &b, 4);
-    assert_eq!(stats_without_timings(&a), stats_without_timings(&b));
+    // resumed run has to rebuild. The first checkpoint is written right after frame 0: the
+    // kill lands in frame 1.
+    kill_resume_and_compare("resume_passive", "circle3_rotate", 32, 4, "checkpoint.bin");
 }
 
 #[test]
 fn front_run_killed_mid_run_and_resumed_matches_uninterrupted_run() {
-    let dir = scratch("resume_front");
-    let (a, b) = (dir.join("a"), dir.join("b"));
     // merge2 at 16³: the spheres meet near t = 0.2 (frame 2 of 6) and merge, so the
-    // checkpoint and the resumed frames straddle the topology change.
-    let o = run_small("merge2", 16, 6, &a, &[]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let args = ["run", "merge2", "--resolution", "16", "--frames", "6"];
-    run_and_kill(&args, &b, "frames/0002.ply");
-    assert!(!b.join("frames/0006.ply").exists());
-    resume(&b, &[]);
-    assert_same_frames(&a, &b, 6);
-    // Volumes, regions and the topology events per frame agree too.
-    assert_eq!(stats_without_timings(&a), stats_without_timings(&b));
-    let merged = stats_without_timings(&b)
+    // checkpoint and the resumed frames straddle the topology change. Volumes, regions and
+    // the topology events per frame agree too.
+    let stats = kill_resume_and_compare("resume_front", "merge2", 16, 6, "frames/0002.ply");
+    let merged = stats
         .iter()
         .any(|l| l["events"]["merge_snaps"].as_u64().is_some_and(|n| n > 0));
     assert!(merged, "the spheres never merged");

@@ -5,7 +5,7 @@
 //! [`Connectivity::compact`] squeezes out, so indices stay stable during a remeshing pass.
 
 use glam::DVec3;
-use polyphase_grid::PhaseId;
+use polyphase_grid::{PhaseId, OUTSIDE};
 
 use crate::mesh::LabeledMesh;
 
@@ -69,6 +69,13 @@ impl Connectivity {
     /// Live triangles incident to vertex `v`.
     pub fn vertex_triangles(&self, v: u32) -> &[u32] {
         &self.vertex_triangles[v as usize]
+    }
+
+    /// Is vertex `v` on a domain-boundary face (an `OUTSIDE` label)?
+    pub fn on_boundary(&self, v: u32) -> bool {
+        self.vertex_triangles(v)
+            .iter()
+            .any(|&t| self.labels(t).contains(&OUTSIDE))
     }
 
     /// Appends the live triangles containing edge `(a, b)` to `out` (cleared first), in the

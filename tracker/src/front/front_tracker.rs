@@ -301,10 +301,10 @@ impl FrontTracker {
         let tol = 1e-9 * (hi - lo).max_element();
         (0..n as u32)
             .map(|v| {
-                let tris = self.c.vertex_triangles(v);
-                if !tris.iter().any(|&t| self.c.labels(t).contains(&OUTSIDE)) {
+                if !self.c.on_boundary(v) {
                     return [false; 3];
                 }
+                let tris = self.c.vertex_triangles(v);
                 if tris.iter().all(|&t| self.c.labels(t).contains(&OUTSIDE)) {
                     return [true; 3];
                 }
@@ -323,11 +323,10 @@ impl FrontTracker {
         // Coordinates within a billionth of the box size of a box plane lie on it.
         let tol = 1e-9 * (hi - lo).max_element();
         for (v, p) in x1.iter_mut().enumerate() {
-            let tris = self.c.vertex_triangles(v as u32);
-            let on_boundary = tris.iter().any(|&t| self.c.labels(t).contains(&OUTSIDE));
-            if !on_boundary {
+            if !self.c.on_boundary(v as u32) {
                 continue;
             }
+            let tris = self.c.vertex_triangles(v as u32);
             if tris.iter().all(|&t| self.c.labels(t).contains(&OUTSIDE)) {
                 *p = x0[v];
                 continue;

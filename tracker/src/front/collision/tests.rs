@@ -2,8 +2,7 @@
 
 use super::*;
 use crate::front::predicates::tests::Rng;
-use crate::mesh::fixtures::{icosphere, two_spheres};
-use crate::LabeledMesh;
+use crate::mesh::fixtures::two_spheres;
 use std::collections::BTreeSet;
 
 /// All pairs, no broad phase.
@@ -116,53 +115,6 @@ fn local_motion_agrees_with_full_detection() {
         }
     }
     assert!(safe > 20 && unsafe_ > 20, "{safe} {unsafe_}");
-}
-
-/// Micro-benchmark (run with `--ignored --nocapture`): `detect` and the intersection checker
-/// on icospheres of about 24k and 120k triangles under a small random motion (a tenth of the
-/// mean edge length). Prints timings; asserts only that the motion is contact-free.
-#[test]
-#[ignore]
-fn bench_detect() {
-    use crate::front::intersection::self_intersections;
-    use std::time::Instant;
-    for (levels, label) in [(vec![5, 4], "~24k"), (vec![6, 5, 5], "~120k")] {
-        let mut m = LabeledMesh::default();
-        for (i, &level) in levels.iter().enumerate() {
-            let c = DVec3::new(1.1 * i as f64, 0.0, 0.0);
-            m.append(&icosphere(c, 0.5, level, 1 + i as u16, 0));
-        }
-        let x0 = m.vertices.clone();
-        let edge = (x0[m.triangles[0][0] as usize] - x0[m.triangles[0][1] as usize]).length();
-        let mut rng = Rng(1);
-        let x1: Vec<DVec3> = x0.iter().map(|&p| p + 0.1 * edge * rng.v()).collect();
-        // Process CPU time (Linux, clock ticks of 10 ms) next to wall time: the shared
-        // machine's load makes wall time alone meaningless.
-        let cpu = || {
-            std::fs::read_to_string("/proc/self/stat")
-                .ok()
-                .and_then(|s| {
-                    let f: Vec<&str> = s.rsplit(')').next()?.split_whitespace().collect();
-                    Some(f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?)
-                })
-                .map_or(f64::NAN, |ticks| ticks * 10.0)
-        };
-        let (start, c0) = (Instant::now(), cpu());
-        let contacts = detect(&m.triangles, &x0, &x1);
-        let (t_detect, c_detect) = (start.elapsed(), cpu() - c0);
-        let (start, c0) = (Instant::now(), cpu());
-        let pairs = self_intersections(&m);
-        let (t_check, c_check) = (start.elapsed(), cpu() - c0);
-        eprintln!(
-            "{label}: {} triangles, {} threads: detect {:.0} ms wall / {c_detect:.0} ms CPU, \
-             self_intersections {:.0} ms wall / {c_check:.0} ms CPU",
-            m.triangles.len(),
-            rayon::current_num_threads(),
-            t_detect.as_secs_f64() * 1e3,
-            t_check.as_secs_f64() * 1e3
-        );
-        assert!(contacts.is_empty() && pairs.is_empty());
-    }
 }
 
 #[test]

@@ -26,6 +26,15 @@ fn split_ball(x: DVec3) -> (f64, PhaseId) {
     }
 }
 
+/// The unit box at 16 cells a side.
+fn unit_box_16() -> GridSpec {
+    GridSpec {
+        origin: DVec3::ZERO,
+        h: 1.0 / 16.0,
+        dims: [16; 3],
+    }
+}
+
 /// Rigid rotation about the x axis through the cube's centre, one turn per unit time.
 struct Spin;
 
@@ -38,11 +47,7 @@ impl VelocityField for Spin {
 
 #[test]
 fn rotating_three_phase_ball_stays_valid_and_keeps_volumes() {
-    let grid = GridSpec {
-        origin: DVec3::ZERO,
-        h: 1.0 / 16.0,
-        dims: [16; 3],
-    };
+    let grid = unit_box_16();
     let mut tracker =
         FrontTracker::from_sampler(grid, &split_ball, 3, 0, FrontParams::default()).expect("valid");
     let start = tracker.phase_volumes();
@@ -78,11 +83,7 @@ fn rotating_three_phase_ball_stays_valid_and_keeps_volumes() {
 
 #[test]
 fn a_restored_tracker_continues_bit_for_bit() {
-    let grid = GridSpec {
-        origin: DVec3::ZERO,
-        h: 1.0 / 16.0,
-        dims: [16; 3],
-    };
+    let grid = unit_box_16();
     let flow = MeshFlow::NoiseAndNormal {
         noise: Box::new(CurlNoise::new(0.5, 0.5, 3)),
         speeds: vec![PairSpeed {

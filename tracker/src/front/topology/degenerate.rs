@@ -27,22 +27,14 @@ use crate::front::connectivity::Connectivity;
 /// Deterministic: groups in order of their sorted vertex triple. Vertices left unused stay
 /// until [`Connectivity::compact`].
 pub fn remove_degenerate_pairs(c: &mut Connectivity) -> usize {
-    let mut keyed: Vec<([u32; 3], u32)> = (0..c.mesh.triangles.len() as u32)
-        .filter(|&t| c.is_live(t))
-        .map(|t| {
-            let mut key = c.triangle(t);
-            key.sort_unstable();
-            (key, t)
-        })
-        .collect();
-    keyed.sort_unstable();
+    let groups: Vec<Vec<u32>> = coincident_groups(c).collect();
     let mut resolved = 0;
-    for group in keyed.chunk_by(|x, y| x.0 == y.0).filter(|g| g.len() > 1) {
-        let reference = c.triangle(group[0].1);
+    for group in groups {
+        let reference = c.triangle(group[0]);
         // Each member as (triangle, [front, back] in the reference triangle's frame).
         let mut stack: Vec<(u32, [PhaseId; 2])> = group
             .iter()
-            .map(|&(_, t)| {
+            .map(|&t| {
                 let [front, back] = c.labels(t);
                 if same_winding(reference, c.triangle(t)) {
                     (t, [front, back])
@@ -78,6 +70,25 @@ pub fn remove_degenerate_pairs(c: &mut Connectivity) -> usize {
         }
     }
     resolved
+}
+
+/// The groups of two or more live triangles of `c` on the same three vertices, each in slot
+/// order, groups in order of their sorted vertex triple (deterministic).
+pub(crate) fn coincident_groups(c: &Connectivity) -> impl Iterator<Item = Vec<u32>> {
+    let mut keyed: Vec<([u32; 3], u32)> = (0..c.mesh.triangles.len() as u32)
+        .filter(|&t| c.is_live(t))
+        .map(|t| {
+            let mut key = c.triangle(t);
+            key.sort_unstable();
+            (key, t)
+        })
+        .collect();
+    keyed.sort_unstable();
+    let mut groups = Vec::new();
+    for group in keyed.chunk_by(|x, y| x.0 == y.0).filter(|g| g.len() > 1) {
+        groups.push(group.iter().map(|&(_, t)| t).collect::<Vec<u32>>());
+    }
+    groups.into_iter()
 }
 
 /// The first `(i, j)` (lexicographic in stack position) with `i != j` where triangle `i` lies

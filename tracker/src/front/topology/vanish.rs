@@ -121,12 +121,11 @@ fn contract(c: &mut Connectivity, triangles: &[u32], bounds: &ShapeBounds) -> bo
     let plan = Contraction::new(c, triangles);
     let merged = &plan.merged;
     let centroid = merged.iter().map(|&v| c.position(v)).sum::<DVec3>() / merged.len() as f64;
-    let on_boundary = |v: u32| {
-        c.vertex_triangles(v)
-            .iter()
-            .any(|&t| c.labels(t).contains(&OUTSIDE))
-    };
-    let pinned: Vec<u32> = merged.iter().copied().filter(|&v| on_boundary(v)).collect();
+    let pinned: Vec<u32> = merged
+        .iter()
+        .copied()
+        .filter(|&v| c.on_boundary(v))
+        .collect();
     let mut targets: Vec<DVec3> = Vec::new();
     if pinned.is_empty() {
         targets.push(centroid);

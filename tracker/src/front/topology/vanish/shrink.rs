@@ -7,13 +7,13 @@
 //! pseudo-motion; the other bounds are relaxed as in the fail-safe pass (Appendix A.4), and
 //! collapses may join different non-manifold curves, which a shrinking junction cell must.
 
-use polyphase_grid::{PhaseId, OUTSIDE};
+use polyphase_grid::PhaseId;
 
 use super::{region_count, Region};
 use crate::front::connectivity::Connectivity;
 use crate::front::params::{Bounds, FrontParams};
 use crate::front::remesh::Remesher;
-use crate::front::topology::degenerate::remove_degenerate_pairs;
+use crate::front::topology::degenerate::{coincident_groups, remove_degenerate_pairs};
 use crate::front::topology::regions::regions;
 
 /// Collapses one region may take. A region below the T2 volume (a fraction of L³) has a few
@@ -40,7 +40,7 @@ pub(super) fn shrink(
     for _ in 0..MAX_COLLAPSES {
         let keep = collapse_shortest(c, params, target, &triangles)?;
         remove_degenerate_pairs(c);
-        if has_coincident(c) {
+        if coincident_groups(c).next().is_some() {
             return None;
         }
         let after = regions(c);
@@ -91,12 +91,10 @@ fn collapse_shortest(
         let Some((keep, _, p)) = r.collapse_target(a, b) else {
             continue;
         };
-        let on_wall = |v: u32| {
-            r.c.vertex_triangles(v)
-                .iter()
-                .any(|&t| r.c.labels(t).contains(&OUTSIDE))
-        };
-        if [a, b].iter().any(|&v| on_wall(v) && r.c.position(v) != p) {
+        if [a, b]
+            .iter()
+            .any(|&v| r.c.on_boundary(v) && r.c.position(v) != p)
+        {
             continue;
         }
         if r.try_collapse(a, b) {
@@ -104,20 +102,6 @@ fn collapse_shortest(
         }
     }
     None
-}
-
-/// Are two live triangles of `c` on the same three vertices?
-fn has_coincident(c: &Connectivity) -> bool {
-    let mut keys: Vec<[u32; 3]> = (0..c.mesh.triangles.len() as u32)
-        .filter(|&t| c.is_live(t))
-        .map(|t| {
-            let mut key = c.triangle(t);
-            key.sort_unstable();
-            key
-        })
-        .collect();
-    keys.sort_unstable();
-    keys.windows(2).any(|w| w[0] == w[1])
 }
 
 /// The vertices of live `triangles`, sorted.
