@@ -285,9 +285,15 @@ impl InterfaceTracker for ContourTracker {
         let mut retries = 0;
         let ((tree, mesh, query, mut stats), next) = loop {
             // A quarter cell per step at most: a sheet lost in one step comes back over a few.
-            departure.shift = aim
-                .as_ref()
-                .map(|aim| VolumeShift::new(&self.mesh, &self.components, aim, 0.25 * self.grid.h));
+            departure.shift = aim.as_ref().map(|aim| {
+                VolumeShift::new(
+                    &self.mesh,
+                    &self.components,
+                    aim,
+                    0.25 * self.grid.h,
+                    self.grid.h,
+                )
+            });
             let built = rebuild(&self.grid, &departure, self.background);
             if bad.load(Ordering::Relaxed) {
                 let c = (self.grid.origin + self.grid.upper()) * 0.5;
