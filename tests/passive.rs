@@ -162,8 +162,10 @@ fn rotating_ball_keeps_its_volume() {
 /// shows less at 128² and 256²; measured 0.13 % and 0.034 %); the Hausdorff distance to the
 /// initial interface at most 1 h at 128² (Table 3: 0.57 h; measured 0.36 h), and falling with
 /// h at least like h^0.6 (Table 3's slowest rate, 0.94, less margin): H(64)/H(128) ≥ 1.5
-/// (measured 2.8). With the correction (the default) the volumes end within 0.01 % but the
-/// interface moves further: 0.82 h at 128², still within 1 h.
+/// (measured 2.8). With the correction (the default) the volumes end within 0.01 % and the
+/// interface ends no further than without it, within a tenth of a cell (measured 0.361 h
+/// against 0.368 h): the furthest point is at the four-phase centre, which offsets at the
+/// junction moved to 0.54 h before they were kept off it.
 #[test]
 fn vortex4_returns_after_one_period() {
     let coarse = run_uncorrected("vortex4", 64);
@@ -183,5 +185,12 @@ fn vortex4_returns_after_one_period() {
     let errors = volume_errors(&corrected);
     assert!(errors.iter().all(|e| *e <= 1e-4), "corrected: {errors:?}");
     let h = metrics::hausdorff(corrected.tracker.mesh(), &corrected.initial);
-    assert!(h <= corrected.h, "corrected: H = {} h", h / corrected.h);
+    // A tenth of a cell: the junction's place differs between the runs by contouring's
+    // choices at the centre, about that much at 256² (0.39 h on, 0.45 h off).
+    assert!(
+        h <= h_fine + 0.1 * corrected.h,
+        "corrected: H = {} h, without the correction {} h",
+        h / corrected.h,
+        h_fine / fine.h
+    );
 }
