@@ -313,12 +313,12 @@ fn solve_pressures(
     let is_corrected = |c: u32| c != NONE && corrected[c as usize];
     let mut diagonal = vec![0.0; n];
     let mut coupling: BTreeMap<(u32, u32), f64> = BTreeMap::new();
-    for t in 0..mesh.triangle_count() {
+    for (t, &w) in weights.iter().enumerate() {
         if mesh.labels[t].contains(&OUTSIDE) {
             continue;
         }
         let [front, back] = components.sides[t];
-        let a = weights[t] * mesh.area(t);
+        let a = w * mesh.area(t);
         for c in [front, back].into_iter().filter(|&c| is_corrected(c)) {
             diagonal[c as usize] += a;
         }
