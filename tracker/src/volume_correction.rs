@@ -522,6 +522,39 @@ mod tests {
         }
     }
 
+    /// Two single-cell cubes of phases 1 and 2 side by side in a 6³ lattice of phase 0, with a
+    /// reach of two cells: every face of each is within it of a corner of their shared face (a
+    /// junction), so the weights would leave them nothing to move; they fall back to moving
+    /// every face, and each cube still changes by its deficit.
+    #[test]
+    fn a_speck_at_a_junction_is_still_corrected() {
+        let mesh = lattice_mesh(6, |i, j, k| match (i, j, k) {
+            (2, 2, 2) => 1,
+            (3, 2, 2) => 2,
+            _ => 0,
+        });
+        let components = Components::find(&mesh, 3, 0);
+        assert_eq!(components.len(), 2);
+        let targets = [components.volume[0] * 1.02, components.volume[1] * 0.97];
+        let reach = 2.0 / 6.0;
+        let corrected = [true, true];
+        let weights = junction_weights(&mesh, &components, &corrected, reach);
+        let interface = (0..mesh.triangle_count()).filter(|&t| !mesh.labels[t].contains(&OUTSIDE));
+        assert!(interface.clone().all(|t| weights[t] == 1.0), "fallback");
+        let shift = VolumeShift::new(&mesh, &components, &targets, f64::INFINITY, reach);
+        let moved = (0..mesh.triangle_count()).filter(|&t| shift.shift(t) != 0.0);
+        assert!(moved.count() > 0, "nothing moves");
+        let change = first_order_change(&mesh, &components, &shift);
+        for c in 0..2 {
+            let deficit = targets[c] - components.volume[c];
+            // A 2×2 solve over the unweighted areas: round-off only.
+            assert!(
+                (change[c] - deficit).abs() < 1e-12,
+                "{c}: {change:?} vs {deficit}"
+            );
+        }
+    }
+
     /// Two balls of one phase with different deficits: each ball's faces move by its own
     /// deficit over its own area, where one pressure for the phase moved both alike.
     #[test]
