@@ -43,15 +43,7 @@ impl Stencil7 {
     /// Index of the +d neighbour of `p`, None past a non-periodic end.
     #[inline]
     pub fn up(&self, p: [usize; 3], d: usize) -> Option<usize> {
-        let mut q = p;
-        if p[d] + 1 < self.dims[d] {
-            q[d] += 1;
-        } else if self.periodic[d] && self.dims[d] > 1 {
-            q[d] = 0;
-        } else {
-            return None;
-        }
-        Some(idx(self.dims, q))
+        up_neighbour(self.dims, self.periodic, p, d)
     }
 
     /// Index of the −d neighbour of `p`, None past a non-periodic end.
@@ -156,19 +148,6 @@ impl Stencil7 {
         }
     }
 
-    /// The same matrix with its axes renumbered so that axis `a` comes first (new axes a,
-    /// a+1, a+2 mod 3): unknown p moves to (p[a], p[a+1], p[a+2]). Line smoothing runs along
-    /// the contiguous first axis, so this puts any axis there.
-    pub fn rotated(&self, a: usize) -> Self {
-        let axes = [a, (a + 1) % 3, (a + 2) % 3];
-        let mut s = Self::zeros(axes.map(|d| self.dims[d]), axes.map(|d| self.periodic[d]));
-        rotate(self.dims, a, &self.diag, &mut s.diag);
-        for (d, &from) in axes.iter().enumerate() {
-            rotate(self.dims, a, &self.off[from], &mut s.off[d]);
-        }
-        s
-    }
-
     /// y = A·x, parallel over x-rows.
     pub fn apply(&self, x: &[f64], y: &mut [f64]) {
         let nx = self.dims[0];
@@ -182,8 +161,28 @@ impl Stencil7 {
     }
 }
 
-/// `dst` = `src` (values on a box of `dims`) renumbered as [`Stencil7::rotated`] renumbers
-/// unknowns: axis `a` first.
+/// Index of the +d neighbour of `p` in a box of `dims`, None past a non-periodic end.
+#[inline]
+pub(crate) fn up_neighbour(
+    dims: [usize; 3],
+    periodic: [bool; 3],
+    p: [usize; 3],
+    d: usize,
+) -> Option<usize> {
+    let mut q = p;
+    if p[d] + 1 < dims[d] {
+        q[d] += 1;
+    } else if periodic[d] && dims[d] > 1 {
+        q[d] = 0;
+    } else {
+        return None;
+    }
+    Some(idx(dims, q))
+}
+
+/// `dst` = `src` (values on a box of `dims`) renumbered with axis `a` first: p moves to
+/// (p[a], p[a+1], p[a+2]) mod 3. Line smoothing runs along the contiguous first axis, so this
+/// puts any axis there.
 pub(crate) fn rotate(dims: [usize; 3], a: usize, src: &[f64], dst: &mut [f64]) {
     let axes = [a, (a + 1) % 3, (a + 2) % 3];
     let rd = axes.map(|d| dims[d]);
@@ -238,7 +237,18 @@ mod tests {
         let mut ax = vec![0.0; s.len()];
         s.apply(&x, &mut ax);
         for a in 0..3 {
-            let r = s.rotated(a);
+            let mut r = Stencil7::zeros(
+                [s.dims[a], s.dims[(a + 1) % 3], s.dims[(a + 2) % 3]],
+                [
+                    s.periodic[a],
+                    s.periodic[(a + 1) % 3],
+                    s.periodic[(a + 2) % 3],
+                ],
+            );
+            rotate(s.dims, a, &s.diag, &mut r.diag);
+            for d in 0..3 {
+                rotate(s.dims, a, &s.off[(a + d) % 3], &mut r.off[d]);
+            }
             let (mut xr, mut axr, mut rax) = (vec![0.0; s.len()], vec![0.0; s.len()], vec![]);
             rotate(s.dims, a, &x, &mut xr);
             r.apply(&xr, &mut axr);
