@@ -13,15 +13,17 @@
 //! rows).
 //!
 //! Preconditioning: block diagonal, one 7-point block per component (the cross-component
-//! couplings through γ are left out), each by MIC(0) or multigrid.
+//! couplings through γ are left out), each by MIC(0) or by multigrid with line smoothing along
+//! the component's axis ([`LineMultigrid`]; at 128³ and 1000:1 it takes 12 CG iterations where
+//! point smoothing took 104).
 
 use crate::config::{AxisBoundary, LinearSolverSettings, PreconditionerKind, Wall};
 use crate::error::SolverError;
-use crate::layout::{idx, par_fill, unidx, Layout};
+use crate::layout::{idx, par_fill, Layout};
 use crate::linalg::mic0::Mic0;
 use crate::linalg::multigrid::Multigrid;
 use crate::linalg::pcg::{pcg, LinearOperator, Preconditioner, SolveStats};
-use crate::linalg::stencil::Stencil7;
+use crate::linalg::stencil::{rotate, unrotate, up_neighbour, Stencil7};
 use crate::mac::MacGrid;
 use crate::sample_viscosity::SampleViscosity;
 use rayon::prelude::*;
@@ -391,68 +393,95 @@ impl<'a> ViscousSystem<'a> {
 
     /// The 7-point block of component `a` (couplings among its own faces only).
     pub fn block(&self, a: usize) -> Stencil7 {
+        self.block_numbered(a, 0)
+    }
+
+    /// The block of component `a` with axis `first` as its first (contiguous) axis: face p
+    /// becomes unknown (p[first], p[first+1], p[first+2]) as [`rotate`] numbers vectors.
+    /// Assembled in that order directly, so no second copy of the block is ever held.
+    pub fn block_numbered(&self, a: usize, first: usize) -> Stencil7 {
         let l = self.layout;
         let fd = l.face_dims(a);
-        let mut s = Stencil7::zeros(fd, l.periodic);
+        let axes = [first, (first + 1) % 3, (first + 2) % 3];
+        let rd = axes.map(|d| fd[d]);
+        let mut s = Stencil7::zeros(rd, axes.map(|d| l.periodic[d]));
+        let Stencil7 { diag, off, .. } = &mut s;
+        let [off0, off1, off2] = off;
+        diag.par_chunks_mut(rd[0])
+            .zip(off0.par_chunks_mut(rd[0]))
+            .zip(off1.par_chunks_mut(rd[0]))
+            .zip(off2.par_chunks_mut(rd[0]))
+            .enumerate()
+            .for_each(|(row, (((dg, o0), o1), o2))| {
+                let (q1, q2) = (row % rd[1], row / rd[1]);
+                for q0 in 0..rd[0] {
+                    let mut p = [0; 3];
+                    p[axes[0]] = q0;
+                    p[axes[1]] = q1;
+                    p[axes[2]] = q2;
+                    let (d, o) = self.block_row(a, p);
+                    dg[q0] = d;
+                    o0[q0] = o[axes[0]];
+                    o1[q0] = o[axes[1]];
+                    o2[q0] = o[axes[2]];
+                }
+            });
+        s
+    }
+
+    /// Row of face `p` in component `a`'s block: its diagonal and its couplings to the +axis
+    /// neighbours (natural axes); identity rows for fixed faces.
+    fn block_row(&self, a: usize, p: [usize; 3]) -> (f64, [f64; 3]) {
+        let l = self.layout;
+        let fd = self.fdims[a];
+        let f = idx(fd, p);
+        if self.open[a][f] == 0.0 {
+            return (1.0, [0.0; 3]);
+        }
         let h2 = self.h * self.h;
         let dt = self.dt;
-        let rows: Vec<(f64, [f64; 3])> = (0..fd[0] * fd[1] * fd[2])
-            .into_par_iter()
-            .map(|f| {
-                if self.open[a][f] == 0.0 {
-                    return (1.0, [0.0; 3]);
+        let up = |d: usize| up_neighbour(fd, l.periodic, p, d);
+        let mut diag = self.rho_face[a][f];
+        let mut off = [0.0; 3];
+        if !(l.periodic[a] && l.n[a] == 1) {
+            for cell in [l.cell_below(a, p[a]), l.cell_above_node(a, p[a])]
+                .into_iter()
+                .flatten()
+            {
+                let mut q = p;
+                q[a] = cell;
+                diag += dt * self.w_cell[idx(l.n, q)] / h2;
+            }
+            if let (Some(hi), Some(nb)) = (l.cell_above_node(a, p[a]), up(a)) {
+                if self.open[a][nb] > 0.0 {
+                    let mut q = p;
+                    q[a] = hi;
+                    off[a] = -dt * self.w_cell[idx(l.n, q)] / h2;
                 }
-                let p = unidx(fd, f);
-                let mut diag = self.rho_face[a][f];
-                let mut off = [0.0; 3];
-                if !(l.periodic[a] && l.n[a] == 1) {
-                    for cell in [l.cell_below(a, p[a]), l.cell_above_node(a, p[a])]
-                        .into_iter()
-                        .flatten()
-                    {
-                        let mut q = p;
-                        q[a] = cell;
-                        diag += dt * self.w_cell[idx(l.n, q)] / h2;
-                    }
-                    if let (Some(hi), Some(nb)) = (l.cell_above_node(a, p[a]), s.up(p, a)) {
-                        if self.open[a][nb] > 0.0 {
-                            let mut q = p;
-                            q[a] = hi;
-                            off[a] = -dt * self.w_cell[idx(l.n, q)] / h2;
-                        }
-                    }
-                }
-                for b in (0..3).filter(|&b| b != a) {
-                    if l.periodic[b] && l.n[b] == 1 {
-                        continue;
-                    }
-                    let k = pair_index(a, b);
-                    let ed = l.edge_dims(PAIRS[k].0, PAIRS[k].1);
-                    for node in [p[b], l.node_above(b, p[b])] {
-                        let mut q = p;
-                        q[b] = node;
-                        let c = self.edge_coef(b, p[b], node) * self.h;
-                        diag += dt * self.w_edge[k][idx(ed, q)] * c * c / h2;
-                    }
-                    let node = l.node_above(b, p[b]);
-                    if let Some(nb) = s.up(p, b) {
-                        if !l.on_wall(b, node) && self.open[a][nb] > 0.0 {
-                            let mut q = p;
-                            q[b] = node;
-                            off[b] = -dt * self.w_edge[k][idx(ed, q)] / h2;
-                        }
-                    }
-                }
-                (diag, off)
-            })
-            .collect();
-        for (f, (d, o)) in rows.into_iter().enumerate() {
-            s.diag[f] = d;
-            for (dd, v) in o.into_iter().enumerate() {
-                s.off[dd][f] = v;
             }
         }
-        s
+        for b in (0..3).filter(|&b| b != a) {
+            if l.periodic[b] && l.n[b] == 1 {
+                continue;
+            }
+            let k = pair_index(a, b);
+            let ed = self.edims[k];
+            for node in [p[b], l.node_above(b, p[b])] {
+                let mut q = p;
+                q[b] = node;
+                let c = self.edge_coef(b, p[b], node) * self.h;
+                diag += dt * self.w_edge[k][idx(ed, q)] * c * c / h2;
+            }
+            let node = l.node_above(b, p[b]);
+            if let Some(nb) = up(b) {
+                if !l.on_wall(b, node) && self.open[a][nb] > 0.0 {
+                    let mut q = p;
+                    q[b] = node;
+                    off[b] = -dt * self.w_edge[k][idx(ed, q)] / h2;
+                }
+            }
+        }
+        (diag, off)
     }
 
     /// Offsets of the three components in the stacked vector.
@@ -521,6 +550,31 @@ impl Preconditioner for BlockPreconditioner<'_> {
     }
 }
 
+/// Multigrid on one component's block with line smoothing along the component's own axis.
+///
+/// Across a viscosity jump the shear weights (harmonic means at edges) fall to the low
+/// viscosity while the normal-stress weights (arithmetic means at cells) stay high, so faces
+/// near the interface couple strongly only along their own axis: a point smoother leaves
+/// errors that are smooth along that axis and rough across it, which 2×2×2 aggregation cannot
+/// represent either. Solving whole lines along the axis removes that anisotropy. The block is
+/// stored with its axis first (contiguous lines); residuals and corrections are renumbered on
+/// the way in and out.
+struct LineMultigrid<'b> {
+    /// Face dimensions in the operator's numbering.
+    dims: [usize; 3],
+    axis: usize,
+    mg: Multigrid<'b>,
+}
+
+impl Preconditioner for LineMultigrid<'_> {
+    fn apply(&self, r: &[f64], z: &mut [f64]) {
+        self.mg.apply_with(
+            |rr| rotate(self.dims, self.axis, r, rr),
+            |zr| unrotate(self.dims, self.axis, zr, z),
+        );
+    }
+}
+
 /// Solves the implicit viscosity step in place; returns the solve statistics and memory use.
 pub(crate) fn solve(
     system: &ViscousSystem<'_>,
@@ -529,10 +583,14 @@ pub(crate) fn solve(
 ) -> Result<(SolveStats, usize), SolverError> {
     let b = system.rhs(vel);
     let mut x = system.stack(vel);
-    let blocks: Vec<Stencil7> = (0..3).map(|a| system.block(a)).collect();
+    let blocks: Vec<Stencil7> = match settings.preconditioner {
+        PreconditionerKind::Mic0 => (0..3).map(|a| system.block(a)).collect(),
+        // Each block with its own axis first, for the line smoother.
+        PreconditionerKind::Multigrid => (0..3).map(|a| system.block_numbered(a, a)).collect(),
+    };
     let mut mem: usize = blocks.iter().map(Stencil7::memory_bytes).sum();
     let mut pre: Vec<Box<dyn Preconditioner + '_>> = Vec::with_capacity(3);
-    for blk in &blocks {
+    for (a, blk) in blocks.iter().enumerate() {
         match settings.preconditioner {
             PreconditionerKind::Mic0 => {
                 let m = Mic0::new(blk);
@@ -540,9 +598,13 @@ pub(crate) fn solve(
                 pre.push(Box::new(m));
             }
             PreconditionerKind::Multigrid => {
-                let m = Multigrid::new(blk);
-                mem += m.memory_bytes();
-                pre.push(Box::new(m));
+                let mg = Multigrid::with_line_smoothing(blk);
+                mem += mg.memory_bytes();
+                pre.push(Box::new(LineMultigrid {
+                    dims: system.fdims[a],
+                    axis: a,
+                    mg,
+                }));
             }
         }
     }
@@ -671,6 +733,64 @@ mod tests {
                             assert!((blk.off[d][f] - expect).abs() < 1e-12, "off {a} {f} {d}");
                         }
                     }
+                }
+            }
+        });
+    }
+
+    #[test]
+    fn renumbered_blocks_are_the_blocks_renumbered() {
+        with_system(|sys| {
+            for a in 0..3 {
+                let blk = sys.block(a);
+                let r = sys.block_numbered(a, a);
+                let mut expect = vec![0.0; blk.len()];
+                rotate(blk.dims, a, &blk.diag, &mut expect);
+                // Entries computed by the same row code: bit-identical.
+                assert_eq!(r.diag, expect, "diag {a}");
+                for d in 0..3 {
+                    rotate(blk.dims, a, &blk.off[(a + d) % 3], &mut expect);
+                    assert_eq!(r.off[d], expect, "off {a} {d}");
+                }
+            }
+        });
+    }
+
+    #[test]
+    fn multigrid_and_mic0_solves_agree() {
+        with_system(|sys| {
+            let l = sys.layout;
+            let grid = polyphase_grid::GridSpec {
+                origin: glam::DVec3::ZERO,
+                h: sys.h,
+                dims: l.n,
+            };
+            let mut vel = MacGrid::zeros(grid, l, crate::config::Interpolation::Trilinear);
+            for (a, comp) in vel.comps.iter_mut().enumerate() {
+                for (f, v) in comp.iter_mut().enumerate() {
+                    *v = ((f * 7 + a * 3) % 11) as f64 - 5.0;
+                }
+            }
+            let solve_with = |preconditioner| {
+                let settings = LinearSolverSettings {
+                    preconditioner,
+                    tolerance: 1e-12,
+                    max_iterations: 500,
+                };
+                let mut v = vel.clone();
+                solve(sys, &mut v, &settings).expect("converges");
+                v
+            };
+            let mic = solve_with(PreconditionerKind::Mic0);
+            let mg = solve_with(PreconditionerKind::Multigrid);
+            for a in 0..3 {
+                for (f, (x, y)) in mic.comps[a].iter().zip(&mg.comps[a]).enumerate() {
+                    // Both to a 1e-12 relative residual of a system whose condition number is
+                    // below 1e3: the solutions agree to well under 1e-8 of the face values.
+                    assert!(
+                        (x - y).abs() < 1e-8 * (1.0 + x.abs()),
+                        "{a} {f}: {x} vs {y}"
+                    );
                 }
             }
         });
