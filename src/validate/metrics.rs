@@ -12,6 +12,7 @@ use serde_json::Value;
 
 use super::capillary::{crossing_period, lamb_period, laplace_jump};
 use super::case::MetricSpec;
+use super::extremum::extremum;
 use super::layered_flow::{Layer, LayeredFlow};
 use super::plot::{Plot, Series};
 use super::surge_front::Column;
@@ -255,9 +256,49 @@ pub fn evaluate(
             let (ours, reference, error, plot) = profile_error(spec, k, last, scene)?;
             ((ours, reference, error, error <= tolerance), Some(plot))
         }
+        kind @ ("minimum" | "maximum" | "time_of_minimum" | "time_of_maximum" | "final_value") => {
+            let k = key()?;
+            let reference = spec.value.filter(|v| v.is_finite()).with_context(|| {
+                format!("metric '{}' ({kind}) needs a finite `value`", spec.name)
+            })?;
+            let values: Vec<f64> = frames.iter().map(|f| number(f, k)).collect::<Result<_>>()?;
+            let mine: Vec<(f64, f64)> = times.iter().copied().zip(values.iter().copied()).collect();
+            let (ours, plot) = if kind == "final_value" {
+                note = Some(format!("at t = {t_end}"));
+                let plot = over_time(k, curves(mine, "reference", bound(reference), false));
+                (values[values.len() - 1], plot)
+            } else {
+                let largest = kind.ends_with("maximum");
+                let (t, v) = extremum(&times, &values, largest)
+                    .with_context(|| format!("stats '{k}' hold a non-finite value"))?;
+                let plot = if kind.starts_with("time_of") {
+                    let (lo, hi) = values
+                        .iter()
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                            (lo.min(v), hi.max(v))
+                        });
+                    note = Some(format!("the {} {v:.5} at t = {t:.4}", &kind[8..]));
+                    over_time(
+                        k,
+                        curves(
+                            mine,
+                            "reference time",
+                            vec![(reference, lo), (reference, hi)],
+                            false,
+                        ),
+                    )
+                } else {
+                    note = Some(format!("at t = {t:.4}"));
+                    over_time(k, curves(mine, "reference", bound(reference), false))
+                };
+                (if kind.starts_with("time_of") { t } else { v }, plot)
+            };
+            (relative(ours, reference), Some(plot))
+        }
         other => bail!(
             "metric '{}': unknown kind '{other}' (kinds: rt_linear_growth, free_fall, roundness, \
-             max_value, final_max, series, surge_front, profile, laplace, oscillation_period)",
+             max_value, final_max, series, surge_front, profile, laplace, oscillation_period, \
+             minimum, maximum, time_of_minimum, time_of_maximum, final_value)",
             spec.name
         ),
     };
