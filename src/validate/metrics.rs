@@ -743,6 +743,43 @@ mod tests {
     }
 
     #[test]
+    fn extremes_and_the_final_value_are_read_against_the_cases_value() {
+        // The bubble_rise2 case's metrics on frames 0.1 apart whose circularity dips to 0.9 at
+        // t = 0.2 (exactly between parabolic samples) and whose centroid ends at 1.1.
+        let case = include_str!("../../validation/bubble_rise2/case.toml");
+        let file: super::super::case::CaseFile = toml::from_str(case).unwrap();
+        let scene = Scene::parse(
+            include_str!("../../validation/bubble_rise2/scene.toml"),
+            "bubble_rise2/scene.toml",
+        )
+        .unwrap();
+        let frames: Vec<Value> = (0..5)
+            .map(|i| {
+                let t = 0.1 * i as f64;
+                json!({"time": t, "circularity": 0.9 + (t - 0.2) * (t - 0.2),
+                       "centroid": [0.5, 1.0 + 0.025 * i as f64, 0.0]})
+            })
+            .collect();
+        let dir = Path::new("validation/bubble_rise2");
+        let run = |spec: &MetricSpec| evaluate(spec, &frames, &scene, dir, false);
+        let minimum = run(&file.metrics[0]).unwrap();
+        assert!((minimum.ours - 0.9).abs() < 1e-12, "{minimum:?}");
+        assert!((minimum.error - (0.9 / 0.9013 - 1.0)).abs() < 1e-12);
+        let when = run(&file.metrics[1]).unwrap();
+        assert!((when.ours - 0.2).abs() < 1e-12, "{when:?}");
+        let last = run(&file.metrics[4]).unwrap();
+        assert_eq!(last.ours, 1.1);
+        assert_eq!(last.note.as_deref(), Some("at t = 0.4"));
+        let mut spec = file.metrics[4].clone();
+        spec.value = None;
+        let err = run(&spec).unwrap_err().to_string();
+        assert!(
+            err.contains("(final_value) needs a finite `value`"),
+            "{err}"
+        );
+    }
+
+    #[test]
     fn final_max_takes_a_number_or_the_largest_entry() {
         let last: Value = serde_json::from_str(
             r#"{"hausdorff": {"over_h": 0.4}, "volume_error": {"a": -0.02, "b": 0.01}}"#,
