@@ -269,15 +269,17 @@ pub fn evaluate(
                 (values[values.len() - 1], plot)
             } else {
                 let largest = kind.ends_with("maximum");
+                let timed = kind.starts_with("time_of_");
                 let (t, v) = extremum(&times, &values, largest)
                     .with_context(|| format!("stats '{k}' hold a non-finite value"))?;
-                let plot = if kind.starts_with("time_of") {
+                let plot = if timed {
                     let (lo, hi) = values
                         .iter()
                         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
                             (lo.min(v), hi.max(v))
                         });
-                    note = Some(format!("the {} {v:.5} at t = {t:.4}", &kind[8..]));
+                    let which = kind.trim_start_matches("time_of_");
+                    note = Some(format!("the {which} {v:.5} at t = {t:.4}"));
                     over_time(
                         k,
                         curves(
@@ -291,7 +293,7 @@ pub fn evaluate(
                     note = Some(format!("at t = {t:.4}"));
                     over_time(k, curves(mine, "reference", bound(reference), false))
                 };
-                (if kind.starts_with("time_of") { t } else { v }, plot)
+                (if timed { t } else { v }, plot)
             };
             (relative(ours, reference), Some(plot))
         }
@@ -744,8 +746,8 @@ mod tests {
 
     #[test]
     fn extremes_and_the_final_value_are_read_against_the_cases_value() {
-        // The bubble_rise2 case's metrics on frames 0.1 apart whose circularity dips to 0.9 at
-        // t = 0.2 (exactly between parabolic samples) and whose centroid ends at 1.1.
+        // The bubble_rise2 case's metrics on frames 0.1 apart whose circularity, a parabola,
+        // dips to 0.9 at t = 0.2 and whose centroid ends at 1.1.
         let case = include_str!("../../validation/bubble_rise2/case.toml");
         let file: super::super::case::CaseFile = toml::from_str(case).unwrap();
         let scene = Scene::parse(
