@@ -6,6 +6,7 @@
 
 mod capillary;
 mod case;
+mod extremum;
 mod indicator;
 mod layered_flow;
 mod metrics;

@@ -1,5 +1,5 @@
 //! Measurements of the interface for stats, as declared by the scene's `[[measure]]` tables:
-//! fronts, tips, centroids and connected pieces of a phase.
+//! fronts, tips, centroids, connected pieces of a phase and a slab's circularity.
 
 use glam::DVec3;
 use polyphase_scenes::MeasureKind;
@@ -53,10 +53,74 @@ pub fn measure(mesh: &LabeledMesh, kind: &MeasureKind) -> Measured {
             Measured::Point((volume > 0.0).then(|| moment / volume))
         }
         MeasureKind::Pieces { phase } => Measured::Pieces(pieces(mesh, phase)),
+        MeasureKind::Circularity { phase, z } => Measured::Value(
+            cross_section(mesh, phase, z)
+                .filter(|s| s.area > 0.0 && s.perimeter > 0.0)
+                .map(|s| 2.0 * (std::f64::consts::PI * s.area).sqrt() / s.perimeter),
+        ),
         MeasureKind::RiseVelocity { .. }
         | MeasureKind::VelocityProfile { .. }
         | MeasureKind::PressureJump { .. } => Measured::Value(None),
     }
+}
+
+/// The cut of a phase by a plane z = const.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CrossSection {
+    /// Area of the phase in the plane (m²).
+    pub area: f64,
+    /// Length of the cut through the phase's interfaces with other phases (m); the domain's
+    /// walls, where the phase touches them, are not counted.
+    pub perimeter: f64,
+}
+
+/// The cross-section of `phase` in the plane z = `z`: each triangle bounding the phase that
+/// straddles the plane contributes the segment where the plane cuts it. A vertex counts as
+/// above the plane when z_v ≥ z, so a vertex or edge lying in the plane is cut once, by the
+/// triangles that reach below it. The area is the shoelace sum over the segments, each
+/// oriented by its triangle's normal so the phase lies to its left (domain faces included,
+/// which closes a section that touches a wall); the perimeter sums the segments of
+/// interfaces with other phases only. `None` when the plane misses the phase.
+pub fn cross_section(mesh: &LabeledMesh, phase: PhaseId, z: f64) -> Option<CrossSection> {
+    let (mut twice_area, mut perimeter, mut cut) = (0.0, 0.0, false);
+    for (t, labels) in mesh.labels.iter().enumerate() {
+        let side = bounds(mesh, t, phase);
+        if side == 0.0 {
+            continue;
+        }
+        let corners = mesh.corners(t);
+        let above = corners.map(|c| c.z >= z);
+        let mut ends = [DVec3::ZERO; 2];
+        let mut n = 0;
+        for i in 0..3 {
+            let (a, b) = (corners[i], corners[(i + 1) % 3]);
+            if above[i] != above[(i + 1) % 3] {
+                ends[n.min(1)] = a + (b - a) * ((z - a.z) / (b.z - a.z));
+                n += 1;
+            }
+        }
+        if n != 2 {
+            continue;
+        }
+        cut = true;
+        // The phase's outward normal in the plane; the segment runs with the phase on its
+        // left, i.e. the outward normal on its right: (d.y, −d.x) · n > 0.
+        let [a, b, c] = corners;
+        let outward = side * (b - a).cross(c - a);
+        let (mut p, mut q) = (ends[0], ends[1]);
+        let d = q - p;
+        if d.y * outward.x - d.x * outward.y < 0.0 {
+            std::mem::swap(&mut p, &mut q);
+        }
+        twice_area += p.x * q.y - q.x * p.y;
+        if !labels.contains(&OUTSIDE) {
+            perimeter += d.truncate().length();
+        }
+    }
+    cut.then_some(CrossSection {
+        area: 0.5 * twice_area,
+        perimeter,
+    })
 }
 
 /// +1 when triangle `t` bounds `phase` from its back side, −1 from its front side, 0 when it
@@ -261,5 +325,89 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+    }
+
+    /// A prism of phase 1 in phase 0 over the polygon `corners` (counter-clockwise), from
+    /// z = 0 to 2 with a ring of vertices at z = 1 as well; its caps face the domain
+    /// (`OUTSIDE`), and so do the sides listed in `on_wall`.
+    fn prism(corners: &[(f64, f64)], on_wall: &[usize]) -> LabeledMesh {
+        let n = corners.len() as u32;
+        let mut mesh = LabeledMesh {
+            vertices: Vec::new(),
+            triangles: Vec::new(),
+            labels: Vec::new(),
+        };
+        for z in [0.0, 1.0, 2.0] {
+            for &(x, y) in corners {
+                mesh.vertices.push(DVec3::new(x, y, z));
+            }
+        }
+        for layer in 0..2 {
+            for i in 0..n {
+                let j = (i + 1) % n;
+                let (a, b) = (layer * n + i, layer * n + j);
+                let (c, d) = (a + n, b + n);
+                let outer = if on_wall.contains(&(i as usize)) {
+                    OUTSIDE
+                } else {
+                    0
+                };
+                mesh.triangles.push([a, b, d]);
+                mesh.triangles.push([a, d, c]);
+                mesh.labels.extend([[outer, 1], [outer, 1]]);
+            }
+        }
+        for i in 1..n - 1 {
+            mesh.triangles.push([0, i + 1, i]);
+            mesh.triangles.push([2 * n, 2 * n + i, 2 * n + i + 1]);
+            mesh.labels.extend([[OUTSIDE, 1], [OUTSIDE, 1]]);
+        }
+        mesh
+    }
+
+    #[test]
+    fn a_cross_section_has_the_polygons_area_and_perimeter() {
+        // A regular 12-gon of circumradius r: area 3 r², perimeter 24 r sin(π/12). Cut between
+        // the rings and exactly through the middle ring alike.
+        let r = 0.3;
+        let corners: Vec<(f64, f64)> = (0..12)
+            .map(|k| {
+                let a = std::f64::consts::PI * k as f64 / 6.0;
+                (0.5 + r * a.cos(), 1.0 + r * a.sin())
+            })
+            .collect();
+        let mesh = prism(&corners, &[]);
+        let perimeter = 24.0 * r * (std::f64::consts::PI / 12.0).sin();
+        for z in [0.5, 1.0, 1.5] {
+            let s = cross_section(&mesh, 1, z).unwrap();
+            assert!((s.area - 3.0 * r * r).abs() < 1e-12, "{z}: {s:?}");
+            assert!((s.perimeter - perimeter).abs() < 1e-12, "{z}: {s:?}");
+            let Measured::Value(Some(c)) =
+                measure(&mesh, &MeasureKind::Circularity { phase: 1, z })
+            else {
+                panic!("no circularity at {z}");
+            };
+            let exact = 2.0 * (std::f64::consts::PI * 3.0).sqrt() * r / perimeter;
+            assert!((c - exact).abs() < 1e-12, "{c} against {exact}");
+        }
+        // The phase around it sees the same section with the opposite sign, and a plane
+        // above the prism misses it.
+        assert!((cross_section(&mesh, 0, 1.0).unwrap().area + 3.0 * r * r).abs() < 1e-12);
+        assert_eq!(cross_section(&mesh, 1, 2.5), None);
+        assert_eq!(
+            measure(&mesh, &MeasureKind::Circularity { phase: 1, z: 2.5 }),
+            Measured::Value(None)
+        );
+    }
+
+    #[test]
+    fn a_wall_closes_the_section_but_is_no_perimeter() {
+        // A unit square against a wall along its first side: area 1, perimeter 3.
+        let mesh = prism(&[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)], &[0]);
+        let s = cross_section(&mesh, 1, 0.25).unwrap();
+        assert!(
+            (s.area - 1.0).abs() < 1e-12 && (s.perimeter - 3.0).abs() < 1e-12,
+            "{s:?}"
+        );
     }
 }

@@ -11,7 +11,9 @@ pub mod setup;
 pub mod sim;
 pub mod tension;
 
-pub use diagnostics::{interface_extent, measure, pieces, Measured, Piece};
+pub use diagnostics::{
+    cross_section, interface_extent, measure, pieces, CrossSection, Measured, Piece,
+};
 pub use error::CouplingError;
 pub use rt_theory::RtLinear;
 pub use setup::{build_tracker, from_scene, with_tracker, AnyTracker};

@@ -70,7 +70,9 @@ pub struct TensionSpec {
 /// (component, axis, coupled scenes): the fluid's velocity component along each layer of
 /// solver cells across `axis` (a shear flow's profile); `pressure_jump` (phases = [inside,
 /// outside], coupled scenes): the mean pressure of the inside phase's solver cells minus the
-/// outside phase's (a static drop's Laplace jump).
+/// outside phase's (a static drop's Laplace jump); `circularity` (phase, slab scenes): the
+/// perimeter of the circle of the phase's cross-sectional area over the perimeter of its
+/// interfaces, cut at the slab's mid-plane.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeasureSpec {

@@ -30,6 +30,11 @@ pub enum MeasureKind {
     /// The mean pressure of the solver cells of `inside` minus that of the cells of
     /// `outside`: a static drop's Laplace jump. Coupled scenes only.
     PressureJump { inside: PhaseId, outside: PhaseId },
+    /// The circularity of the cross-section of `phase` in the plane z = `z` (a slab's
+    /// mid-plane): the perimeter of the circle of the same area over the perimeter of the
+    /// phase's interfaces with other phases (Hysing et al. 2009's measure of a 2D bubble's
+    /// deformation; 1 for a disc). Slab scenes only.
+    Circularity { phase: PhaseId, z: f64 },
 }
 
 /// A validated measurement with its stats key.
@@ -42,11 +47,13 @@ pub struct Measure {
 const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// Validates the scene's `[[measure]]` tables against its phase names (`coupled`: whether the
-/// scene has a fluid, which `rise_velocity` needs); errors name the table.
+/// scene has a fluid, which `rise_velocity` needs; `slab_mid`: the z of a slab scene's
+/// mid-plane, where `circularity` cuts, `None` for a 3D scene); errors name the table.
 pub fn compile_measures(
     specs: &[MeasureSpec],
     phases: &[String],
     coupled: bool,
+    slab_mid: Option<f64>,
     bad: &dyn Fn(&str, String) -> SceneError,
 ) -> Result<Vec<Measure>, SceneError> {
     let mut out: Vec<Measure> = Vec::with_capacity(specs.len());
@@ -161,12 +168,27 @@ pub fn compile_measures(
                     format!("pressure_jump_{a}_{b}"),
                 )
             }
+            "circularity" => {
+                let z = slab_mid.ok_or_else(|| {
+                    bad(
+                        &format!("{place}.kind"),
+                        "'circularity' measures a 2D cross-section: it needs a slab scene \
+                         (domain.slab = true)"
+                            .into(),
+                    )
+                })?;
+                let (phase, name) = one_phase()?;
+                (
+                    MeasureKind::Circularity { phase, z },
+                    format!("circularity_{name}"),
+                )
+            }
             other => {
                 return Err(bad(
                     &format!("{place}.kind"),
                     format!(
                         "unknown kind '{other}' (kinds: front, tips, centroid, pieces, \
-                         rise_velocity, velocity_profile, pressure_jump)"
+                         rise_velocity, velocity_profile, pressure_jump, circularity)"
                     ),
                 ))
             }

@@ -159,7 +159,17 @@ impl Scene {
         }
         // Painting order: a later shape wins, so ascending priority (stable: file order among equals).
         shapes.sort_by_key(|s| s.priority);
-        let measures = compile_measures(&file.measure, &phases, solver_grid.is_some(), &bad)?;
+        let slab_mid = file
+            .domain
+            .slab
+            .then(|| 0.5 * (file.domain.lo[2] + file.domain.hi[2]));
+        let measures = compile_measures(
+            &file.measure,
+            &phases,
+            solver_grid.is_some(),
+            slab_mid,
+            &bad,
+        )?;
         let tension = compile_tension(&file.tension, &phases, solver_grid.is_some(), &bad)?;
         Ok(Scene {
             file,

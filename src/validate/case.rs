@@ -35,8 +35,10 @@ pub struct MetricSpec {
     /// Name in the table.
     pub name: String,
     /// `rt_linear_growth`, `free_fall`, `roundness`, `max_value`, `final_max`, `series`,
-    /// `surge_front`, `profile`, `laplace`, `oscillation_period`, or the first-step kinds `indicator_accuracy` and
-    /// `indicator_mismatch_distance` (`indicator.rs`), which need no run.
+    /// `surge_front`, `profile`, `laplace`, `oscillation_period`, `minimum`, `maximum`,
+    /// `time_of_minimum`, `time_of_maximum`, `final_value`, or the first-step kinds
+    /// `indicator_accuracy` and `indicator_mismatch_distance` (`indicator.rs`), which need no
+    /// run.
     pub kind: String,
     /// The stats key it reads (a dotted path into a frame's JSON line, e.g. `tips.max`).
     #[serde(default)]
@@ -74,6 +76,10 @@ pub struct MetricSpec {
     /// `surge_front`: the range of T compared.
     #[serde(default)]
     pub window: Option<[f64; 2]>,
+    /// `minimum`, `maximum`, `final_value`: the reference's value of the stats key;
+    /// `time_of_minimum`, `time_of_maximum`: the reference's time (s) of that extremum.
+    #[serde(default)]
+    pub value: Option<f64>,
     /// Largest accepted error: relative, or for `max_value` and `roundness` the bound itself.
     pub tolerance: f64,
     /// `indicator_accuracy`, `indicator_mismatch_distance`: the paper's rows as printed,

@@ -12,6 +12,7 @@ use serde_json::Value;
 
 use super::capillary::{crossing_period, lamb_period, laplace_jump};
 use super::case::MetricSpec;
+use super::extremum::extremum;
 use super::layered_flow::{Layer, LayeredFlow};
 use super::plot::{Plot, Series};
 use super::surge_front::Column;
@@ -255,9 +256,51 @@ pub fn evaluate(
             let (ours, reference, error, plot) = profile_error(spec, k, last, scene)?;
             ((ours, reference, error, error <= tolerance), Some(plot))
         }
+        kind @ ("minimum" | "maximum" | "time_of_minimum" | "time_of_maximum" | "final_value") => {
+            let k = key()?;
+            let reference = spec.value.filter(|v| v.is_finite()).with_context(|| {
+                format!("metric '{}' ({kind}) needs a finite `value`", spec.name)
+            })?;
+            let values: Vec<f64> = frames.iter().map(|f| number(f, k)).collect::<Result<_>>()?;
+            let mine: Vec<(f64, f64)> = times.iter().copied().zip(values.iter().copied()).collect();
+            let (ours, plot) = if kind == "final_value" {
+                note = Some(format!("at t = {t_end}"));
+                let plot = over_time(k, curves(mine, "reference", bound(reference), false));
+                (values[values.len() - 1], plot)
+            } else {
+                let largest = kind.ends_with("maximum");
+                let timed = kind.starts_with("time_of_");
+                let (t, v) = extremum(&times, &values, largest)
+                    .with_context(|| format!("stats '{k}' hold a non-finite value"))?;
+                let plot = if timed {
+                    let (lo, hi) = values
+                        .iter()
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                            (lo.min(v), hi.max(v))
+                        });
+                    let which = kind.trim_start_matches("time_of_");
+                    note = Some(format!("the {which} {v:.5} at t = {t:.4}"));
+                    over_time(
+                        k,
+                        curves(
+                            mine,
+                            "reference time",
+                            vec![(reference, lo), (reference, hi)],
+                            false,
+                        ),
+                    )
+                } else {
+                    note = Some(format!("at t = {t:.4}"));
+                    over_time(k, curves(mine, "reference", bound(reference), false))
+                };
+                (if timed { t } else { v }, plot)
+            };
+            (relative(ours, reference), Some(plot))
+        }
         other => bail!(
             "metric '{}': unknown kind '{other}' (kinds: rt_linear_growth, free_fall, roundness, \
-             max_value, final_max, series, surge_front, profile, laplace, oscillation_period)",
+             max_value, final_max, series, surge_front, profile, laplace, oscillation_period, \
+             minimum, maximum, time_of_minimum, time_of_maximum, final_value)",
             spec.name
         ),
     };
@@ -699,6 +742,43 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("2 layers need 1 interfaces, got 0"), "{err}");
+    }
+
+    #[test]
+    fn extremes_and_the_final_value_are_read_against_the_cases_value() {
+        // The bubble_rise2 case's metrics on frames 0.1 apart whose circularity, a parabola,
+        // dips to 0.9 at t = 0.2 and whose centroid ends at 1.1.
+        let case = include_str!("../../validation/bubble_rise2/case.toml");
+        let file: super::super::case::CaseFile = toml::from_str(case).unwrap();
+        let scene = Scene::parse(
+            include_str!("../../validation/bubble_rise2/scene.toml"),
+            "bubble_rise2/scene.toml",
+        )
+        .unwrap();
+        let frames: Vec<Value> = (0..5)
+            .map(|i| {
+                let t = 0.1 * i as f64;
+                json!({"time": t, "circularity": 0.9 + (t - 0.2) * (t - 0.2),
+                       "centroid": [0.5, 1.0 + 0.025 * i as f64, 0.0]})
+            })
+            .collect();
+        let dir = Path::new("validation/bubble_rise2");
+        let run = |spec: &MetricSpec| evaluate(spec, &frames, &scene, dir, false);
+        let minimum = run(&file.metrics[0]).unwrap();
+        assert!((minimum.ours - 0.9).abs() < 1e-12, "{minimum:?}");
+        assert!((minimum.error - (0.9 / 0.9013 - 1.0)).abs() < 1e-12);
+        let when = run(&file.metrics[1]).unwrap();
+        assert!((when.ours - 0.2).abs() < 1e-12, "{when:?}");
+        let last = run(&file.metrics[4]).unwrap();
+        assert_eq!(last.ours, 1.1);
+        assert_eq!(last.note.as_deref(), Some("at t = 0.4"));
+        let mut spec = file.metrics[4].clone();
+        spec.value = None;
+        let err = run(&spec).unwrap_err().to_string();
+        assert!(
+            err.contains("(final_value) needs a finite `value`"),
+            "{err}"
+        );
     }
 
     #[test]
