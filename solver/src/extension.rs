@@ -4,7 +4,7 @@
 //! continuous, but the tangential ones jump (air slips past a falling drop). Interpolating
 //! across the jump, as semi-Lagrangian advection and the tracker's backtrace do, hands the
 //! light phase's velocity to the heavy one, and at 1000:1 that is a large momentum leak.
-//! Each momentum group of phases (`phase::momentum_groups`: densities within 10×) therefore
+//! Each momentum group of phases (`phase::momentum_groups`: densities within 100×) therefore
 //! gets its own field: its velocity on the faces it owns, continued outward a few faces by
 //! averaging (the ghost velocity of two-velocity treatments, Rudman 1998; the velocity
 //! extrapolation of free-surface solvers), so a stencil near the interface only ever reads one
