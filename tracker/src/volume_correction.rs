@@ -454,6 +454,26 @@ mod tests {
         change
     }
 
+    /// Asserts that the offsets change each of the first `targets.len()` components by its
+    /// deficit within `tol` (the caller states why), and returns the changes.
+    fn assert_deficits_met(
+        mesh: &LabeledMesh,
+        components: &Components,
+        shift: &VolumeShift,
+        targets: &[f64],
+        tol: f64,
+    ) -> Vec<f64> {
+        let change = first_order_change(mesh, components, shift);
+        for (c, target) in targets.iter().enumerate() {
+            let deficit = target - components.volume[c];
+            assert!(
+                (change[c] - deficit).abs() < tol,
+                "{c}: {change:?} vs {deficit}"
+            );
+        }
+        change
+    }
+
     /// Three phases in a box: the offsets solve the Laplacian, `Σ_b A_ab (p_a − p_b)` equals
     /// each corrected component's deficit, and the background does not move on its own.
     #[test]
@@ -466,14 +486,9 @@ mod tests {
         let components = Components::find(&mesh, 3, 0);
         let targets = [components.volume[0] * 1.02, components.volume[1] * 0.97];
         let shift = VolumeShift::new(&mesh, &components, &targets, f64::INFINITY, 1.0 / 6.0);
-        let change = first_order_change(&mesh, &components, &shift);
+        // Gaussian elimination on a 2×2 system: round-off only.
+        let change = assert_deficits_met(&mesh, &components, &shift, &targets, 1e-12);
         for c in 0..2 {
-            let deficit = targets[c] - components.volume[c];
-            // Gaussian elimination on a 2×2 system: round-off only.
-            assert!(
-                (change[c] - deficit).abs() < 1e-12,
-                "{c}: {change:?} vs {deficit}"
-            );
             assert_eq!(shift.aimed()[c], Some(components.volume[c] + change[c]));
         }
     }
@@ -511,15 +526,8 @@ mod tests {
             at_line > 0 && far > 0,
             "{at_line} faces at the line, {far} far"
         );
-        let change = first_order_change(&mesh, &components, &shift);
-        for c in 0..2 {
-            let deficit = targets[c] - components.volume[c];
-            // The weights only rescale the Laplacian's areas: a 2×2 solve, round-off only.
-            assert!(
-                (change[c] - deficit).abs() < 1e-12,
-                "{c}: {change:?} vs {deficit}"
-            );
-        }
+        // The weights only rescale the Laplacian's areas: a 2×2 solve, round-off only.
+        assert_deficits_met(&mesh, &components, &shift, &targets, 1e-12);
     }
 
     /// Two single-cell cubes of phases 1 and 2 side by side in a 6³ lattice of phase 0, with a
@@ -544,15 +552,8 @@ mod tests {
         let shift = VolumeShift::new(&mesh, &components, &targets, f64::INFINITY, reach);
         let moved = (0..mesh.triangle_count()).filter(|&t| shift.shift(t) != 0.0);
         assert!(moved.count() > 0, "nothing moves");
-        let change = first_order_change(&mesh, &components, &shift);
-        for c in 0..2 {
-            let deficit = targets[c] - components.volume[c];
-            // A 2×2 solve over the unweighted areas: round-off only.
-            assert!(
-                (change[c] - deficit).abs() < 1e-12,
-                "{c}: {change:?} vs {deficit}"
-            );
-        }
+        // A 2×2 solve over the unweighted areas: round-off only.
+        assert_deficits_met(&mesh, &components, &shift, &targets, 1e-12);
     }
 
     /// Two balls of one phase with different deficits: each ball's faces move by its own
