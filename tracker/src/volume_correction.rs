@@ -488,8 +488,8 @@ mod tests {
         let shift = VolumeShift::new(&mesh, &components, &targets, f64::INFINITY, 1.0 / 6.0);
         // Gaussian elimination on a 2×2 system: round-off only.
         let change = assert_deficits_met(&mesh, &components, &shift, &targets, 1e-12);
-        for c in 0..2 {
-            assert_eq!(shift.aimed()[c], Some(components.volume[c] + change[c]));
+        for (c, grown) in change.iter().take(2).enumerate() {
+            assert_eq!(shift.aimed()[c], Some(components.volume[c] + grown));
         }
     }
 
