@@ -127,9 +127,11 @@ pub fn with_tracker<T: InterfaceTracker>(
         // Curvature is fitted over 4 tracker cells of mesh: at 2.5 the fit's noise drove a
         // static drop's spurious currents up 8e-5 m/s in 200 steps, at 4 they stay near 2e-5
         // (`validation/laplace2`), for a bias of about +0.17·(4h/R)² in κ (`curvature.rs`).
+        // A slab's κ is its section's: 6e-6 m/s there.
         sim.set_tension(SurfaceTension::new(
             scene.tension.clone(),
             4.0 * scene.grid.h,
+            scene.file.domain.slab.then_some(2),
         ));
     }
     Ok(sim)

@@ -19,6 +19,8 @@ pub struct SurfaceTension {
     tension: Tension,
     /// Fitting neighbourhood of the curvature (m).
     fit_radius: f64,
+    /// The axis a slab (2D) scene is extruded along: κ is then the section's curvature.
+    extrusion: Option<usize>,
     sampler: Option<CurvatureSampler>,
 }
 
@@ -33,18 +35,25 @@ pub struct JumpStats {
 }
 
 impl SurfaceTension {
-    /// The scene's tensions, with curvature fitted over `fit_radius` metres of the mesh.
-    pub fn new(tension: Tension, fit_radius: f64) -> SurfaceTension {
+    /// The scene's tensions, with curvature fitted over `fit_radius` metres of the mesh; for
+    /// a 2D scene run as a slab, `extrusion` is the slab's thin axis
+    /// ([`CurvatureSampler::extruded_along`]).
+    pub fn new(tension: Tension, fit_radius: f64, extrusion: Option<usize>) -> SurfaceTension {
         SurfaceTension {
             tension,
             fit_radius,
+            extrusion,
             sampler: None,
         }
     }
 
     /// Measures the curvature of a new mesh (after every tracker step).
     pub fn refresh(&mut self, mesh: &LabeledMesh) {
-        self.sampler = Some(CurvatureSampler::new(mesh, self.fit_radius));
+        let sampler = CurvatureSampler::new(mesh, self.fit_radius);
+        self.sampler = Some(match self.extrusion {
+            Some(axis) => sampler.extruded_along(axis),
+            None => sampler,
+        });
     }
 
     /// The Laplace jump at each of `faces`: J = p_above − p_below = −σ_ab·κ_below, where

@@ -32,6 +32,8 @@ const MIN_POINTS: usize = 6;
 #[derive(Clone, Debug)]
 pub struct CurvatureSampler {
     radius: f64,
+    /// The axis a 2D scene's slab is extruded along, if any (see [`Self::extruded_along`]).
+    extrusion: Option<usize>,
     /// One surface per phase pair that shares triangles, sorted by pair.
     surfaces: Vec<PairSurface>,
 }
@@ -79,7 +81,22 @@ impl CurvatureSampler {
             .into_iter()
             .map(|(pair, tris)| PairSurface::new(mesh, pair, &tris, &mut local))
             .collect();
-        CurvatureSampler { radius, surfaces }
+        CurvatureSampler {
+            radius,
+            extrusion: None,
+            surfaces,
+        }
+    }
+
+    /// The same sampler for a 2D scene run as a slab extruded along `axis` (0–2): κ is the
+    /// curvature of the section's curve, fitted as `h = a u² + d u + f` over every vertex
+    /// within `radius` of the foot point in the section's plane. A slab is two cells thick, so
+    /// a surface fit there sees a band of ±1 cell across: the fitted curvature along the
+    /// extrusion, zero in truth, was the largest part of the noise that drove a static drop's
+    /// spurious currents (`validation/laplace2`).
+    pub fn extruded_along(mut self, axis: usize) -> CurvatureSampler {
+        self.extrusion = (axis < 3).then_some(axis);
+        self
     }
 
     /// κ = κ1 + κ2 (sum of principal curvatures) of the interface between phases `inside` and
@@ -108,7 +125,7 @@ impl CurvatureSampler {
         // The surface's normals point out of `lo`.
         let sign = if inside == pair.0 { 1.0 } else { -1.0 };
         surface
-            .mean_curvature(foot, seed, self.radius)
+            .mean_curvature(foot, seed, self.radius, self.extrusion)
             .filter(|k| k.is_finite())
             .map(|k| sign * k)
     }
@@ -189,33 +206,70 @@ impl PairSurface {
 
     /// κ (convex towards the normals' side positive) at the point `foot` of triangle `seed`,
     /// fitted over the vertices within `radius` connected to `seed`, in the frame of their
-    /// area normals weighted like the fit.
-    fn mean_curvature(&self, foot: DVec3, seed: usize, radius: f64) -> Option<f64> {
-        let vertices = self.neighbourhood(foot, seed, radius);
+    /// area normals weighted like the fit; with an `extrusion` axis, offsets and normals lose
+    /// their component along it and the fit is the section's curve.
+    fn mean_curvature(
+        &self,
+        foot: DVec3,
+        seed: usize,
+        radius: f64,
+        extrusion: Option<usize>,
+    ) -> Option<f64> {
+        let flat = |mut d: DVec3| {
+            if let Some(axis) = extrusion {
+                d[axis] = 0.0;
+            }
+            d
+        };
+        let vertices = self.neighbourhood(foot, seed, radius, flat);
         if vertices.len() < MIN_POINTS {
             return None;
         }
-        let points: Vec<DVec3> = vertices
+        let offsets: Vec<DVec3> = vertices
             .iter()
-            .map(|&v| self.mesh.vertices[v as usize])
+            .map(|&v| flat(self.mesh.vertices[v as usize] - foot))
             .collect();
         let normal = vertices
             .iter()
-            .zip(&points)
-            .map(|(&v, &p)| weight(p - foot, radius) * self.area_normals[v as usize])
+            .zip(&offsets)
+            .map(|(&v, &d)| weight(d, radius) * flat(self.area_normals[v as usize]))
             .sum::<DVec3>()
             .try_normalize()
-            .or_else(|| self.mesh.area_normal(seed).try_normalize())?;
-        HeightFit::new(&points, foot, normal, radius).map(|fit| fit.curvature())
+            .or_else(|| flat(self.mesh.area_normal(seed)).try_normalize())?;
+        match extrusion {
+            Some(axis) => {
+                let tangent = DVec3::AXES[axis].cross(normal);
+                HeightFit::<3>::new(&offsets, radius, |d| {
+                    let (u, h) = (d.dot(tangent), d.dot(normal));
+                    ([u * u, u, 1.0], h)
+                })
+                .map(|fit| fit.curve_curvature())
+            }
+            None => {
+                let (t1, t2) = normal.any_orthonormal_pair();
+                HeightFit::<6>::new(&offsets, radius, |d| {
+                    let (u, v, h) = (d.dot(t1), d.dot(t2), d.dot(normal));
+                    ([u * u, u * v, v * v, u, v, 1.0], h)
+                })
+                .map(|fit| fit.surface_curvature())
+            }
+        }
     }
 
-    /// The vertices within `radius` of `foot` connected to a corner of triangle `seed` through
-    /// edges between such vertices. Following connectivity rather than taking everything
-    /// within the radius keeps other sheets of the same pair (a thin film's far side, a drop
-    /// about to touch) out of the fit.
-    fn neighbourhood(&self, foot: DVec3, seed: usize, radius: f64) -> Vec<u32> {
+    /// The vertices whose offset from `foot`, as `flat` makes it, is within `radius`,
+    /// connected to a corner of triangle `seed` through edges between such vertices.
+    /// Following connectivity rather than taking everything within the radius keeps other
+    /// sheets of the same pair (a thin film's far side, a drop about to touch) out of the fit.
+    fn neighbourhood(
+        &self,
+        foot: DVec3,
+        seed: usize,
+        radius: f64,
+        flat: impl Fn(DVec3) -> DVec3,
+    ) -> Vec<u32> {
         let r2 = radius * radius;
-        let within = |v: u32| (self.mesh.vertices[v as usize] - foot).length_squared() <= r2;
+        let within =
+            |v: u32| flat(self.mesh.vertices[v as usize] - foot).length_squared() <= r2;
         // Every vertex looked at, within the radius or not, so that none is looked at twice.
         let mut seen = Vec::new();
         let mut found = Vec::new();
@@ -260,44 +314,46 @@ fn weight(d: DVec3, radius: f64) -> f64 {
     }
 }
 
-/// A fitted height function over the tangent plane at a foot point.
-struct HeightFit {
-    /// `[a, b, c, d, e, f]` of `h = a u² + b uv + c v² + d u + e v + f`, in units of the
-    /// radius (u, v, h all divided by it, which keeps the normal equations well scaled).
-    coef: [f64; 6],
+/// A height function fitted over the tangent plane (or the tangent line of a section) at a
+/// foot point: `N` coefficients of the basis the caller gives.
+struct HeightFit<const N: usize> {
+    /// The coefficients, in units of the radius (u, v, h all divided by it, which keeps the
+    /// normal equations well scaled).
+    coef: [f64; N],
     radius: f64,
 }
 
-impl HeightFit {
-    /// Weighted least-squares fit to `points` in the frame of unit `normal` at `foot`; `None`
-    /// when the points do not determine the six coefficients.
-    fn new(points: &[DVec3], foot: DVec3, normal: DVec3, radius: f64) -> Option<HeightFit> {
-        let (t1, t2) = normal.any_orthonormal_pair();
-        let mut ata = [[0.0; 6]; 6];
-        let mut atb = [0.0; 6];
-        for &p in points {
-            let d = p - foot;
+impl<const N: usize> HeightFit<N> {
+    /// Weighted least-squares fit over `offsets` from the foot point; `basis` maps an offset
+    /// (divided by the radius) to the basis functions' values there and the height. `None`
+    /// when the points do not determine the coefficients.
+    fn new(
+        offsets: &[DVec3],
+        radius: f64,
+        basis: impl Fn(DVec3) -> ([f64; N], f64),
+    ) -> Option<HeightFit<N>> {
+        let mut ata = [[0.0; N]; N];
+        let mut atb = [0.0; N];
+        for &d in offsets {
             let w = weight(d, radius);
-            let (u, v, h) = (
-                d.dot(t1) / radius,
-                d.dot(t2) / radius,
-                d.dot(normal) / radius,
-            );
-            let row = [u * u, u * v, v * v, u, v, 1.0];
-            for i in 0..6 {
-                for j in 0..6 {
+            let (row, h) = basis(d / radius);
+            for i in 0..N {
+                for j in 0..N {
                     ata[i][j] += w * row[i] * row[j];
                 }
                 atb[i] += w * row[i] * h;
             }
         }
-        let coef = solve6(ata, atb)?;
+        let coef = solve(ata, atb)?;
         Some(HeightFit { coef, radius })
     }
+}
 
-    /// `−∇·(∇h / √(1 + |∇h|²))` at u = v = 0: positive where the surface bends away from the
-    /// normal (convex on the side it points out of).
-    fn curvature(&self) -> f64 {
+impl HeightFit<6> {
+    /// `−∇·(∇h / √(1 + |∇h|²))` at u = v = 0 of `h = a u² + b uv + c v² + d u + e v + f`:
+    /// positive where the surface bends away from the normal (convex on the side it points
+    /// out of).
+    fn surface_curvature(&self) -> f64 {
         let [a, b, c, d, e, _] = self.coef;
         let g2 = 1.0 + d * d + e * e;
         -((1.0 + e * e) * 2.0 * a - 2.0 * d * e * b + (1.0 + d * d) * 2.0 * c)
@@ -305,12 +361,22 @@ impl HeightFit {
     }
 }
 
-/// Solves the symmetric 6×6 system `m x = b` by Gaussian elimination with partial pivoting;
+impl HeightFit<3> {
+    /// `−h'' / (1 + h'²)^{3/2}` at u = 0 of the curve `h = a u² + d u + f`, signed as
+    /// [`HeightFit::surface_curvature`].
+    fn curve_curvature(&self) -> f64 {
+        let [a, d, _] = self.coef;
+        let g2 = 1.0 + d * d;
+        -2.0 * a / (g2 * g2.sqrt() * self.radius)
+    }
+}
+
+/// Solves the symmetric system `m x = b` by Gaussian elimination with partial pivoting;
 /// `None` when a pivot falls below 1e-12 of the largest diagonal entry (rank deficient).
-fn solve6(mut m: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
-    let scale = (0..6).map(|i| m[i][i].abs()).fold(0.0, f64::max);
-    for k in 0..6 {
-        let p = (k..6)
+fn solve<const N: usize>(mut m: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; N]> {
+    let scale = (0..N).map(|i| m[i][i].abs()).fold(0.0, f64::max);
+    for k in 0..N {
+        let p = (k..N)
             .max_by(|&i, &j| m[i][k].abs().total_cmp(&m[j][k].abs()))
             .unwrap_or(k);
         let pivot = m[p][k].abs();
@@ -320,7 +386,7 @@ fn solve6(mut m: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
         m.swap(k, p);
         b.swap(k, p);
         let pivot_row = m[k];
-        for i in k + 1..6 {
+        for i in k + 1..N {
             let f = m[i][k] / pivot_row[k];
             for (x, y) in m[i][k..].iter_mut().zip(&pivot_row[k..]) {
                 *x -= f * y;
@@ -328,9 +394,9 @@ fn solve6(mut m: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
             b[i] -= f * b[k];
         }
     }
-    let mut x = [0.0; 6];
-    for k in (0..6).rev() {
-        let s: f64 = (k + 1..6).map(|j| m[k][j] * x[j]).sum();
+    let mut x = [0.0; N];
+    for k in (0..N).rev() {
+        let s: f64 = (k + 1..N).map(|j| m[k][j] * x[j]).sum();
         x[k] = (b[k] - s) / m[k][k];
     }
     Some(x)
