@@ -229,8 +229,13 @@ pub fn evaluate(
             for f in frames {
                 a.push(0.5 * (number(f, &format!("{k}.max"))? - number(f, &format!("{k}.min"))?));
             }
-            let ours = crossing_period(&times, &a, r).with_context(|| {
-                format!("'{k}' crosses the radius {r} fewer than three times: run longer")
+            // Half cycles that reach half the start's amplitude count (`crossing_period`).
+            let amplitude = a.first().map_or(0.0, |a0| 0.5 * (a0 - r).abs());
+            let ours = crossing_period(&times, &a, r, amplitude).with_context(|| {
+                format!(
+                    "'{k}' crosses the radius {r} fewer than three times with half cycles of \
+                     at least half the start's amplitude: run longer"
+                )
             })?;
             let density = |p: PhaseId| scene.file.phases[usize::from(p)].density;
             let exact = lamb_period(
