@@ -23,7 +23,7 @@ use crate::layout::{idx, par_fill, Layout};
 use crate::linalg::mic0::Mic0;
 use crate::linalg::multigrid::Multigrid;
 use crate::linalg::pcg::{pcg, LinearOperator, Preconditioner, SolveStats};
-use crate::linalg::stencil::{rotate, unrotate, up_neighbour, Stencil7};
+use crate::linalg::stencil::{rotate, unrotate, up_neighbour, Real, Stencil7};
 use crate::mac::MacGrid;
 use crate::sample_viscosity::SampleViscosity;
 use rayon::prelude::*;
@@ -398,8 +398,9 @@ impl<'a> ViscousSystem<'a> {
 
     /// The block of component `a` with axis `first` as its first (contiguous) axis: face p
     /// becomes unknown (p[first], p[first+1], p[first+2]) as [`rotate`] numbers vectors.
-    /// Assembled in that order directly, so no second copy of the block is ever held.
-    pub fn block_numbered(&self, a: usize, first: usize) -> Stencil7 {
+    /// Assembled in that order directly, so no second copy of the block is ever held; entries
+    /// computed in f64 and stored as `T`.
+    pub fn block_numbered<T: Real>(&self, a: usize, first: usize) -> Stencil7<T> {
         let l = self.layout;
         let fd = l.face_dims(a);
         let axes = [first, (first + 1) % 3, (first + 2) % 3];
@@ -420,10 +421,10 @@ impl<'a> ViscousSystem<'a> {
                     p[axes[1]] = q1;
                     p[axes[2]] = q2;
                     let (d, o) = self.block_row(a, p);
-                    dg[q0] = d;
-                    o0[q0] = o[axes[0]];
-                    o1[q0] = o[axes[1]];
-                    o2[q0] = o[axes[2]];
+                    dg[q0] = T::from_f64(d);
+                    o0[q0] = T::from_f64(o[axes[0]]);
+                    o1[q0] = T::from_f64(o[axes[1]]);
+                    o2[q0] = T::from_f64(o[axes[2]]);
                 }
             });
         s
@@ -557,13 +558,13 @@ impl Preconditioner for BlockPreconditioner<'_> {
 /// near the interface couple strongly only along their own axis: a point smoother leaves
 /// errors that are smooth along that axis and rough across it, which 2×2×2 aggregation cannot
 /// represent either. Solving whole lines along the axis removes that anisotropy. The block is
-/// stored with its axis first (contiguous lines); residuals and corrections are renumbered on
-/// the way in and out.
+/// stored with its axis first (contiguous lines) and in f32; residuals and corrections are
+/// renumbered and converted on the way in and out.
 struct LineMultigrid<'b> {
     /// Face dimensions in the operator's numbering.
     dims: [usize; 3],
     axis: usize,
-    mg: Multigrid<'b>,
+    mg: Multigrid<'b, f32>,
 }
 
 impl Preconditioner for LineMultigrid<'_> {
@@ -583,41 +584,47 @@ pub(crate) fn solve(
 ) -> Result<(SolveStats, usize), SolverError> {
     let b = system.rhs(vel);
     let mut x = system.stack(vel);
-    let blocks: Vec<Stencil7> = match settings.preconditioner {
-        PreconditionerKind::Mic0 => (0..3).map(|a| system.block(a)).collect(),
-        // Each block with its own axis first, for the line smoother.
-        PreconditionerKind::Multigrid => (0..3).map(|a| system.block_numbered(a, a)).collect(),
-    };
-    let mut mem: usize = blocks.iter().map(Stencil7::memory_bytes).sum();
-    let mut pre: Vec<Box<dyn Preconditioner + '_>> = Vec::with_capacity(3);
-    for (a, blk) in blocks.iter().enumerate() {
-        match settings.preconditioner {
-            PreconditionerKind::Mic0 => {
-                let m = Mic0::new(blk);
-                mem += m.memory_bytes();
-                pre.push(Box::new(m));
-            }
-            PreconditionerKind::Multigrid => {
-                let mg = Multigrid::with_line_smoothing(blk);
-                mem += mg.memory_bytes();
-                pre.push(Box::new(LineMultigrid {
-                    dims: system.fdims[a],
-                    axis: a,
-                    mg,
-                }));
-            }
-        }
-    }
-    // CG vectors (x, b, r, z, p, q), the operator's work vectors (masked copy, strains) and
-    // its cell and edge weights.
+    // CG vectors (x, r, p, q; see `pcg`), the operator's work vectors (masked copy, strains)
+    // and its cell and edge weights.
     let cells = system.layout.cells();
     let edges: usize = system.w_edge.iter().map(Vec::len).sum();
-    mem += (7 * system.len() + 4 * cells + 2 * edges) * std::mem::size_of::<f64>();
-    let m = BlockPreconditioner {
-        offsets: system.offsets(),
-        blocks: pre,
+    let mut mem = (5 * system.len() + 4 * cells + 2 * edges) * std::mem::size_of::<f64>();
+    let offsets = system.offsets();
+    let stats = match settings.preconditioner {
+        PreconditionerKind::Mic0 => {
+            let blocks: Vec<Stencil7> = (0..3).map(|a| system.block(a)).collect();
+            let pre: Vec<Mic0<'_>> = blocks.iter().map(Mic0::new).collect();
+            mem += blocks.iter().map(Stencil7::memory_bytes).sum::<usize>();
+            mem += pre.iter().map(Mic0::memory_bytes).sum::<usize>();
+            let m = BlockPreconditioner {
+                offsets,
+                blocks: pre.into_iter().map(|p| Box::new(p) as _).collect(),
+            };
+            pcg(system, &m, b, &mut x, settings, "viscosity")?
+        }
+        PreconditionerKind::Multigrid => {
+            // Each block with its own axis first, for the line smoother; f32 is enough for a
+            // preconditioner (CG's own vectors and operator stay f64).
+            let blocks: Vec<Stencil7<f32>> =
+                (0..3).map(|a| system.block_numbered(a, a)).collect();
+            mem += blocks.iter().map(Stencil7::memory_bytes).sum::<usize>();
+            let pre: Vec<LineMultigrid<'_>> = blocks
+                .iter()
+                .enumerate()
+                .map(|(a, blk)| LineMultigrid {
+                    dims: system.fdims[a],
+                    axis: a,
+                    mg: Multigrid::with_line_smoothing(blk),
+                })
+                .collect();
+            mem += pre.iter().map(|p| p.mg.memory_bytes()).sum::<usize>();
+            let m = BlockPreconditioner {
+                offsets,
+                blocks: pre.into_iter().map(|p| Box::new(p) as _).collect(),
+            };
+            pcg(system, &m, b, &mut x, settings, "viscosity")?
+        }
     };
-    let stats = pcg(system, &m, &b, &mut x, settings, "viscosity")?;
     system.unstack(&x, vel);
     Ok((stats, mem))
 }
@@ -743,7 +750,7 @@ mod tests {
         with_system(|sys| {
             for a in 0..3 {
                 let blk = sys.block(a);
-                let r = sys.block_numbered(a, a);
+                let r = sys.block_numbered::<f64>(a, a);
                 let mut expect = vec![0.0; blk.len()];
                 rotate(blk.dims, a, &blk.diag, &mut expect);
                 // Entries computed by the same row code: bit-identical.
