@@ -27,6 +27,8 @@ const COARSEST_CELLS: usize = 64;
 const COARSE_SCALE: f64 = 0.5;
 /// Minimum x-rows per rayon task: keeps the small levels from drowning in task overhead.
 const ROWS_PER_TASK: usize = 32;
+/// Rows per group of a line sweep, half of them solved side by side (see [`line_half_sweep`]).
+const LINE_GROUP: usize = 8;
 
 /// Work vectors of one level: iterate, scratch, restricted residual of the level below.
 type Work<T> = Mutex<[Vec<T>; 3]>;
@@ -127,33 +129,30 @@ fn coarsen<T: Real>(a: &Stencil7<T>) -> Stencil7<T> {
 fn line_pivots<T: Real>(a: &Stencil7<T>) -> Vec<T> {
     let nx = a.dims[0];
     let mut pivots = vec![T::ZERO; a.len()];
-    pivots
-        .par_chunks_mut(nx)
-        .enumerate()
-        .for_each(|(row, pr)| {
-            let base = row * nx;
-            let mut prev_upper = 0.0;
-            for (i, v) in pr.iter_mut().enumerate() {
-                let d = a.diag[base + i].to_f64();
-                if d <= 0.0 {
-                    prev_upper = 0.0;
-                    continue;
-                }
-                let lower = if i > 0 {
-                    a.off[0][base + i - 1].to_f64()
-                } else {
-                    0.0
-                };
-                let m = d - lower * prev_upper;
-                *v = T::from_f64(1.0 / m);
-                let up = if i + 1 < nx {
-                    a.off[0][base + i].to_f64()
-                } else {
-                    0.0
-                };
-                prev_upper = up / m;
+    pivots.par_chunks_mut(nx).enumerate().for_each(|(row, pr)| {
+        let base = row * nx;
+        let mut prev_upper = 0.0;
+        for (i, v) in pr.iter_mut().enumerate() {
+            let d = a.diag[base + i].to_f64();
+            if d <= 0.0 {
+                prev_upper = 0.0;
+                continue;
             }
-        });
+            let lower = if i > 0 {
+                a.off[0][base + i - 1].to_f64()
+            } else {
+                0.0
+            };
+            let m = d - lower * prev_upper;
+            *v = T::from_f64(1.0 / m);
+            let up = if i + 1 < nx {
+                a.off[0][base + i].to_f64()
+            } else {
+                0.0
+            };
+            prev_upper = up / m;
+        }
+    });
     pivots
 }
 
@@ -183,7 +182,9 @@ fn half_sweep<T: Real>(a: &Stencil7<T>, b: &[T], x: &[T], out: &mut [T], color: 
 /// One red–black line half-sweep: each x-row of `color` ((j + k) mod 2) gets the exact
 /// solution of its own tridiagonal block (couplings along x, those across a periodic wrap
 /// excepted; `pivots` from [`line_pivots`]), with the couplings to other rows taken from `x`.
-/// Every row solve reads only `x`, so the sweep is parallel and deterministic.
+/// Every row solve reads only `x`, so the sweep is parallel and deterministic. The rows of a
+/// group of [`LINE_GROUP`] are eliminated side by side: each row's recurrence is a serial
+/// chain, and interleaving independent chains keeps the core busy.
 fn line_half_sweep<T: Real>(
     a: &Stencil7<T>,
     pivots: &[T],
@@ -194,45 +195,59 @@ fn line_half_sweep<T: Real>(
 ) {
     let nx = a.dims[0];
     let ny = a.dims[1];
-    out.par_chunks_mut(nx)
-        .with_min_len(ROWS_PER_TASK)
+    let off = &a.off[0];
+    out.par_chunks_mut(nx * LINE_GROUP)
+        .with_min_len(ROWS_PER_TASK.div_ceil(LINE_GROUP))
         .enumerate()
         .for_each_init(
-            || vec![T::ZERO; nx],
-            |upper, (row, o)| {
-                let base = row * nx;
-                let xr = &x[base..base + nx];
-                if (row % ny + row / ny) % 2 != color {
-                    o.copy_from_slice(xr);
-                    return;
+            || vec![T::ZERO; nx * LINE_GROUP],
+            |upper, (group, og)| {
+                let first = group * LINE_GROUP;
+                let mut active = [0; LINE_GROUP];
+                let mut lanes = 0;
+                for (r, o) in og.chunks_mut(nx).enumerate() {
+                    let row = first + r;
+                    let base = row * nx;
+                    let xr = &x[base..base + nx];
+                    if (row % ny + row / ny) % 2 != color {
+                        o.copy_from_slice(xr);
+                        continue;
+                    }
+                    o.iter_mut().for_each(|v| *v = T::ZERO);
+                    if a.periodic[0] && nx > 1 {
+                        o[nx - 1] += off[base + nx - 1] * xr[0];
+                        o[0] += off[base + nx - 1] * xr[nx - 1];
+                    }
+                    a.cross_row(row, x, o);
+                    active[lanes] = r;
+                    lanes += 1;
                 }
-                o.iter_mut().for_each(|v| *v = T::ZERO);
-                let off = &a.off[0][base..base + nx];
-                if a.periodic[0] && nx > 1 {
-                    o[nx - 1] += off[nx - 1] * xr[0];
-                    o[0] += off[nx - 1] * xr[nx - 1];
-                }
-                a.cross_row(row, x, o);
-                let inv = &pivots[base..base + nx];
-                let rhs = &b[base..base + nx];
+                let active = &active[..lanes];
                 // Forward elimination with the stored pivots; a row with no positive
                 // diagonal keeps its value.
-                let mut prev = T::ZERO;
+                let mut prev = [T::ZERO; LINE_GROUP];
                 for i in 0..nx {
-                    let lower = if i > 0 { off[i - 1] } else { T::ZERO };
-                    if inv[i] == T::ZERO {
-                        upper[i] = T::ZERO;
-                        o[i] = xr[i];
-                    } else {
-                        let up = if i + 1 < nx { off[i] } else { T::ZERO };
-                        upper[i] = up * inv[i];
-                        o[i] = (rhs[i] - o[i] - lower * prev) * inv[i];
+                    for (lane, &r) in active.iter().enumerate() {
+                        let c = (first + r) * nx + i;
+                        let o = &mut og[r * nx + i];
+                        let inv = pivots[c];
+                        if inv == T::ZERO {
+                            upper[lane * nx + i] = T::ZERO;
+                            *o = x[c];
+                        } else {
+                            let lower = if i > 0 { off[c - 1] } else { T::ZERO };
+                            let up = if i + 1 < nx { off[c] } else { T::ZERO };
+                            upper[lane * nx + i] = up * inv;
+                            *o = (b[c] - *o - lower * prev[lane]) * inv;
+                        }
+                        prev[lane] = *o;
                     }
-                    prev = o[i];
                 }
                 for i in (0..nx.saturating_sub(1)).rev() {
-                    let next = o[i + 1];
-                    o[i] -= upper[i] * next;
+                    for (lane, &r) in active.iter().enumerate() {
+                        let next = og[r * nx + i + 1];
+                        og[r * nx + i] -= upper[lane * nx + i] * next;
+                    }
                 }
             },
         );

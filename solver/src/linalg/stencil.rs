@@ -228,11 +228,22 @@ pub(crate) fn up_neighbour(
     Some(idx(dims, q))
 }
 
+/// The axes in the order [`rotate`] numbers them: `a`, then the other two in natural order,
+/// so consecutive rows stay neighbours in memory and renumbering runs through the cache.
+pub(crate) fn first_axes(a: usize) -> [usize; 3] {
+    match a {
+        0 => [0, 1, 2],
+        1 => [1, 0, 2],
+        _ => [2, 0, 1],
+    }
+}
+
 /// `dst` = `src` (values on a box of `dims`) renumbered with axis `a` first: p moves to
-/// (p[a], p[a+1], p[a+2]) mod 3. Line smoothing runs along the contiguous first axis, so this
-/// puts any axis there. Values convert between the two precisions on the way.
+/// (p[axes[0]], p[axes[1]], p[axes[2]]), axes = [`first_axes`]. Line smoothing runs along the
+/// contiguous first axis, so this puts any axis there. Values convert between the two
+/// precisions on the way.
 pub(crate) fn rotate<S: Real, D: Real>(dims: [usize; 3], a: usize, src: &[S], dst: &mut [D]) {
-    let axes = [a, (a + 1) % 3, (a + 2) % 3];
+    let axes = first_axes(a);
     let rd = axes.map(|d| dims[d]);
     dst.par_chunks_mut(rd[0])
         .enumerate()
@@ -250,14 +261,15 @@ pub(crate) fn rotate<S: Real, D: Real>(dims: [usize; 3], a: usize, src: &[S], ds
 
 /// Inverse of [`rotate`]: `dst` (on a box of `dims`) from `src` numbered with axis `a` first.
 pub(crate) fn unrotate<S: Real, D: Real>(dims: [usize; 3], a: usize, src: &[S], dst: &mut [D]) {
-    let rd = [dims[a], dims[(a + 1) % 3], dims[(a + 2) % 3]];
+    let axes = first_axes(a);
+    let rd = axes.map(|d| dims[d]);
     dst.par_chunks_mut(dims[0])
         .enumerate()
         .for_each(|(row, out)| {
             let (j, k) = (row % dims[1], row / dims[1]);
             for (i, o) in out.iter_mut().enumerate() {
                 let p = [i, j, k];
-                *o = D::from_f64(src[idx(rd, [p[a], p[(a + 1) % 3], p[(a + 2) % 3]])].to_f64());
+                *o = D::from_f64(src[idx(rd, axes.map(|d| p[d]))].to_f64());
             }
         });
 }
@@ -285,17 +297,11 @@ mod tests {
         let mut ax = vec![0.0; s.len()];
         s.apply(&x, &mut ax);
         for a in 0..3 {
-            let mut r = Stencil7::zeros(
-                [s.dims[a], s.dims[(a + 1) % 3], s.dims[(a + 2) % 3]],
-                [
-                    s.periodic[a],
-                    s.periodic[(a + 1) % 3],
-                    s.periodic[(a + 2) % 3],
-                ],
-            );
+            let axes = first_axes(a);
+            let mut r = Stencil7::zeros(axes.map(|d| s.dims[d]), axes.map(|d| s.periodic[d]));
             rotate(s.dims, a, &s.diag, &mut r.diag);
-            for d in 0..3 {
-                rotate(s.dims, a, &s.off[(a + d) % 3], &mut r.off[d]);
+            for (out, &d) in r.off.iter_mut().zip(&axes) {
+                rotate(s.dims, a, &s.off[d], out);
             }
             let (mut xr, mut axr, mut rax) = (vec![0.0; s.len()], vec![0.0; s.len()], vec![]);
             rotate(s.dims, a, &x, &mut xr);
