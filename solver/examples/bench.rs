@@ -1,5 +1,8 @@
-//! `cargo run --release -p polyphase-solver --example bench [pressure|viscosity] [RES...]`:
-//! prints the solver benchmark table (default: both solves at resolutions 64 and 128).
+//! `cargo run --release -p polyphase-solver --example bench [pressure|viscosity]
+//! [mic0|multigrid] [RES...]`: prints the solver benchmark table (default: both solves with
+//! both preconditioners at resolutions 64 and 128).
+
+use polyphase_solver::PreconditionerKind;
 
 fn main() -> Result<(), polyphase_solver::SolverError> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -10,7 +13,14 @@ fn main() -> Result<(), polyphase_solver::SolverError> {
         (false, false) => (true, true),
         sel => sel,
     };
-    let rows = polyphase_solver::bench::run_selected(&res, p, v)?;
+    let pre = if only("mic0") {
+        Some(PreconditionerKind::Mic0)
+    } else if only("multigrid") {
+        Some(PreconditionerKind::Multigrid)
+    } else {
+        None
+    };
+    let rows = polyphase_solver::bench::run_selected(&res, p, v, pre)?;
     print!("{}", polyphase_solver::bench::format_table(&rows));
     Ok(())
 }

@@ -109,14 +109,16 @@ fn scene(
 
 /// Runs the whole benchmark at each resolution (cells per axis).
 pub fn run(resolutions: &[usize]) -> Result<Vec<BenchRow>, SolverError> {
-    run_selected(resolutions, true, true)
+    run_selected(resolutions, true, true, None)
 }
 
-/// Runs the pressure and/or the viscosity part of the benchmark at each resolution.
+/// Runs the pressure and/or the viscosity part of the benchmark at each resolution, with one
+/// preconditioner or (`None`) both.
 pub fn run_selected(
     resolutions: &[usize],
     pressure_solves: bool,
     viscosity_solves: bool,
+    only: Option<PreconditionerKind>,
 ) -> Result<Vec<BenchRow>, SolverError> {
     let mut rows = Vec::new();
     let dt = 0.01;
@@ -133,6 +135,9 @@ pub fn run_selected(
                 (PreconditionerKind::Mic0, "mic0"),
                 (PreconditionerKind::Multigrid, "multigrid"),
             ] {
+                if only.is_some_and(|o| o != kind) {
+                    continue;
+                }
                 let settings = LinearSolverSettings {
                     preconditioner: kind,
                     tolerance: TOLERANCE,

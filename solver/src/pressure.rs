@@ -160,7 +160,7 @@ fn make_consistent(a: &Stencil7, b: &mut [f64]) {
 /// Builds the preconditioner `kind` for `a` and runs PCG.
 pub(crate) fn solve_stencil(
     a: &Stencil7,
-    b: &[f64],
+    b: Vec<f64>,
     x: &mut [f64],
     settings: &LinearSolverSettings,
     system: &'static str,
@@ -225,7 +225,7 @@ pub(crate) fn project(
     }
     make_consistent(&a, &mut b);
     let mut q = vec![0.0; layout.cells()];
-    let (stats, pre_mem) = solve_stencil(&a, &b, &mut q, settings, "pressure")?;
+    let (stats, pre_mem) = solve_stencil(&a, b, &mut q, settings, "pressure")?;
     for d in 0..3 {
         let fd = layout.face_dims(d);
         let comp = &mut vel.comps[d];
@@ -250,7 +250,8 @@ pub(crate) fn project(
     }
     let pressure = q.par_iter().map(|v| v * h / dt).collect();
     let n = layout.cells();
-    let memory_bytes = a.memory_bytes() + pre_mem + 6 * n * std::mem::size_of::<f64>();
+    // CG's four vectors (x, r, p, q; see `pcg`).
+    let memory_bytes = a.memory_bytes() + pre_mem + 4 * n * std::mem::size_of::<f64>();
     Ok(Projected {
         stats,
         pressure,

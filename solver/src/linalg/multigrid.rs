@@ -5,11 +5,12 @@
 //! before, black→red after) is an SPD preconditioner for CG. Parallel and deterministic: each
 //! colour update reads only the previous iterate. [`Multigrid::with_line_smoothing`] relaxes
 //! whole x-rows at once (red–black by row), for matrices coupled far more strongly along x than
-//! across.
+//! across; each row's tridiagonal factorisation is computed once, at set-up. The hierarchy is
+//! stored in the precision of its matrix ([`Real`]): f32 for a preconditioner-only matrix.
 
-use crate::layout::{idx, par_fill};
+use crate::layout::idx;
 use crate::linalg::pcg::Preconditioner;
-use crate::linalg::stencil::Stencil7;
+use crate::linalg::stencil::{Real, Stencil7};
 use rayon::prelude::*;
 use std::sync::{Mutex, PoisonError};
 
@@ -26,90 +27,137 @@ const COARSEST_CELLS: usize = 64;
 const COARSE_SCALE: f64 = 0.5;
 /// Minimum x-rows per rayon task: keeps the small levels from drowning in task overhead.
 const ROWS_PER_TASK: usize = 32;
+/// Rows per group of a line sweep, half of them solved side by side (see [`line_half_sweep`]).
+const LINE_GROUP: usize = 8;
+
+/// Work vectors of one level: iterate, scratch, restricted residual of the level below.
+type Work<T> = Mutex<[Vec<T>; 3]>;
 
 /// The hierarchy: level 0 is the matrix itself.
-pub(crate) struct Multigrid<'a> {
-    fine: &'a Stencil7,
-    coarse: Vec<Stencil7>,
-    /// Per-level work vectors (iterate, scratch, restricted residual of the level below),
-    /// reused across applications; PCG applies the preconditioner sequentially.
-    scratch: Vec<Mutex<[Vec<f64>; 3]>>,
-    /// Smoothing by x-lines rather than points (see [`Multigrid::with_line_smoothing`]).
-    lines: bool,
+pub(crate) struct Multigrid<'a, T: Real = f64> {
+    fine: &'a Stencil7<T>,
+    coarse: Vec<Stencil7<T>>,
+    /// Per-level work vectors, reused across applications; PCG applies the preconditioner
+    /// sequentially.
+    scratch: Vec<Work<T>>,
+    /// Per level, the inverse pivots of each x-row's tridiagonal block (0 where the diagonal
+    /// is not positive); empty without line smoothing.
+    pivots: Vec<Vec<T>>,
     /// Smoothing sweep pairs before and after each coarse correction.
     smooth: usize,
 }
 
-fn coarsen(a: &Stencil7) -> Stencil7 {
-    let cd = [
-        a.dims[0].div_ceil(2),
-        a.dims[1].div_ceil(2),
-        a.dims[2].div_ceil(2),
-    ];
-    let n = cd[0] * cd[1] * cd[2];
-    let entries: Vec<[f64; 4]> = (0..n)
-        .into_par_iter()
-        .map(|cc| {
-            let pc = crate::layout::unidx(cd, cc);
-            let mut out = [0.0; 4];
-            for dk in 0..2 {
-                for dj in 0..2 {
-                    for di in 0..2 {
-                        let p = [2 * pc[0] + di, 2 * pc[1] + dj, 2 * pc[2] + dk];
-                        if p[0] >= a.dims[0] || p[1] >= a.dims[1] || p[2] >= a.dims[2] {
-                            continue;
-                        }
-                        let c = idx(a.dims, p);
-                        let mut extra = a.diag[c];
-                        for d in 0..3 {
-                            if a.up(p, d).is_some() {
-                                extra += a.off[d][c];
+/// Galerkin coarse matrix of `a` (see module doc), summed in f64.
+fn coarsen<T: Real>(a: &Stencil7<T>) -> Stencil7<T> {
+    let fd = a.dims;
+    let cd = fd.map(|d| d.div_ceil(2));
+    let mut s = Stencil7::zeros(cd, a.periodic);
+    let Stencil7 { diag, off, .. } = &mut s;
+    let [off0, off1, off2] = off;
+    // Pass 1: couplings across each coarse face, and each aggregate's row sums in `diag`.
+    diag.par_chunks_mut(cd[0])
+        .zip(off0.par_chunks_mut(cd[0]))
+        .zip(off1.par_chunks_mut(cd[0]))
+        .zip(off2.par_chunks_mut(cd[0]))
+        .enumerate()
+        .for_each(|(row, (((dg, o0), o1), o2))| {
+            let (jc, kc) = (row % cd[1], row / cd[1]);
+            for ic in 0..cd[0] {
+                let pc = [ic, jc, kc];
+                let mut out = [0.0; 4];
+                for dk in 0..2 {
+                    for dj in 0..2 {
+                        for di in 0..2 {
+                            let p = [2 * ic + di, 2 * jc + dj, 2 * kc + dk];
+                            if p[0] >= fd[0] || p[1] >= fd[1] || p[2] >= fd[2] {
+                                continue;
                             }
-                            if let Some(l) = a.down(p, d) {
-                                extra += a.off[d][l];
-                            }
-                            if let Some(u) = a.up(p, d) {
-                                let pu = crate::layout::unidx(a.dims, u);
-                                if pu[d] / 2 != pc[d] {
-                                    out[1 + d] += COARSE_SCALE * a.off[d][c];
+                            let c = idx(fd, p);
+                            let mut extra = a.diag[c].to_f64();
+                            for d in 0..3 {
+                                if a.up(p, d).is_some() {
+                                    let o = a.off[d][c].to_f64();
+                                    extra += o;
+                                    // A coupling between two aggregates (the +d neighbour
+                                    // wraps to node 0 past the end).
+                                    let ud = if p[d] + 1 < fd[d] { p[d] + 1 } else { 0 };
+                                    if ud / 2 != pc[d] {
+                                        out[1 + d] += COARSE_SCALE * o;
+                                    }
+                                }
+                                if let Some(l) = a.down(p, d) {
+                                    extra += a.off[d][l].to_f64();
                                 }
                             }
+                            out[0] += extra.max(0.0);
                         }
-                        out[0] += extra.max(0.0);
                     }
                 }
+                dg[ic] = T::from_f64(out[0]);
+                o0[ic] = T::from_f64(out[1]);
+                o1[ic] = T::from_f64(out[2]);
+                o2[ic] = T::from_f64(out[3]);
             }
-            out
-        })
-        .collect();
-    let mut s = Stencil7::zeros(cd, a.periodic);
-    for (c, e) in entries.iter().enumerate() {
-        for d in 0..3 {
-            s.off[d][c] = e[1 + d];
-        }
-    }
-    let diag: Vec<f64> = (0..n)
-        .into_par_iter()
-        .map(|c| {
-            let p = crate::layout::unidx(cd, c);
-            let mut dsum = entries[c][0];
-            for d in 0..3 {
-                if s.up(p, d).is_some() {
-                    dsum -= s.off[d][c];
+        });
+    // Pass 2: diagonal = row sum minus the coarse couplings.
+    let mut diag = std::mem::take(&mut s.diag);
+    diag.par_chunks_mut(cd[0])
+        .enumerate()
+        .for_each(|(row, dg)| {
+            let (j, k) = (row % cd[1], row / cd[1]);
+            for (i, v) in dg.iter_mut().enumerate() {
+                let p = [i, j, k];
+                let c = row * cd[0] + i;
+                let mut dsum = v.to_f64();
+                for d in 0..3 {
+                    if s.up(p, d).is_some() {
+                        dsum -= s.off[d][c].to_f64();
+                    }
+                    if let Some(l) = s.down(p, d) {
+                        dsum -= s.off[d][l].to_f64();
+                    }
                 }
-                if let Some(l) = s.down(p, d) {
-                    dsum -= s.off[d][l];
-                }
+                *v = T::from_f64(dsum);
             }
-            dsum
-        })
-        .collect();
+        });
     s.diag = diag;
     s
 }
 
+/// Inverse pivots of the tridiagonal factorisation of each x-row of `a` (couplings along x,
+/// the periodic wrap excepted), 0 where the diagonal is not positive; computed in f64.
+fn line_pivots<T: Real>(a: &Stencil7<T>) -> Vec<T> {
+    let nx = a.dims[0];
+    let mut pivots = vec![T::ZERO; a.len()];
+    pivots.par_chunks_mut(nx).enumerate().for_each(|(row, pr)| {
+        let base = row * nx;
+        let mut prev_upper = 0.0;
+        for (i, v) in pr.iter_mut().enumerate() {
+            let d = a.diag[base + i].to_f64();
+            if d <= 0.0 {
+                prev_upper = 0.0;
+                continue;
+            }
+            let lower = if i > 0 {
+                a.off[0][base + i - 1].to_f64()
+            } else {
+                0.0
+            };
+            let m = d - lower * prev_upper;
+            *v = T::from_f64(1.0 / m);
+            let up = if i + 1 < nx {
+                a.off[0][base + i].to_f64()
+            } else {
+                0.0
+            };
+            prev_upper = up / m;
+        }
+    });
+    pivots
+}
+
 /// One red–black half-sweep: unknowns of `color` get their Gauss–Seidel value from `x`.
-fn half_sweep(a: &Stencil7, b: &[f64], x: &[f64], out: &mut [f64], color: usize) {
+fn half_sweep<T: Real>(a: &Stencil7<T>, b: &[T], x: &[T], out: &mut [T], color: usize) {
     let nx = a.dims[0];
     let ny = a.dims[1];
     out.par_chunks_mut(nx)
@@ -122,7 +170,7 @@ fn half_sweep(a: &Stencil7, b: &[f64], x: &[f64], out: &mut [f64], color: usize)
             let first = (color + j + k) % 2;
             for (i, oi) in o.iter_mut().enumerate() {
                 let c = base + i;
-                *oi = if i % 2 == first && a.diag[c] > 0.0 {
+                *oi = if i % 2 == first && a.diag[c] > T::ZERO {
                     (b[c] - *oi) / a.diag[c]
                 } else {
                     x[c]
@@ -133,77 +181,101 @@ fn half_sweep(a: &Stencil7, b: &[f64], x: &[f64], out: &mut [f64], color: usize)
 
 /// One red–black line half-sweep: each x-row of `color` ((j + k) mod 2) gets the exact
 /// solution of its own tridiagonal block (couplings along x, those across a periodic wrap
-/// excepted), with the couplings to other rows taken from `x`. Every row solve reads only `x`,
-/// so the sweep is parallel and deterministic.
-fn line_half_sweep(a: &Stencil7, b: &[f64], x: &[f64], out: &mut [f64], color: usize) {
+/// excepted; `pivots` from [`line_pivots`]), with the couplings to other rows taken from `x`.
+/// Every row solve reads only `x`, so the sweep is parallel and deterministic. The rows of a
+/// group of [`LINE_GROUP`] are eliminated side by side: each row's recurrence is a serial
+/// chain, and interleaving independent chains keeps the core busy.
+fn line_half_sweep<T: Real>(
+    a: &Stencil7<T>,
+    pivots: &[T],
+    b: &[T],
+    x: &[T],
+    out: &mut [T],
+    color: usize,
+) {
     let nx = a.dims[0];
     let ny = a.dims[1];
-    out.par_chunks_mut(nx)
-        .with_min_len(ROWS_PER_TASK)
+    let off = &a.off[0];
+    out.par_chunks_mut(nx * LINE_GROUP)
+        .with_min_len(ROWS_PER_TASK.div_ceil(LINE_GROUP))
         .enumerate()
         .for_each_init(
-            || vec![0.0; nx],
-            |upper, (row, o)| {
-                let base = row * nx;
-                let xr = &x[base..base + nx];
-                if (row % ny + row / ny) % 2 != color {
-                    o.copy_from_slice(xr);
-                    return;
-                }
-                o.iter_mut().for_each(|v| *v = 0.0);
-                let off = &a.off[0][base..base + nx];
-                if a.periodic[0] && nx > 1 {
-                    o[nx - 1] += off[nx - 1] * xr[0];
-                    o[0] += off[nx - 1] * xr[nx - 1];
-                }
-                a.cross_row(row, x, o);
-                let diag = &a.diag[base..base + nx];
-                // Thomas algorithm; a row with no positive diagonal keeps its value.
-                let mut prev_upper = 0.0;
-                let mut prev = 0.0;
-                for i in 0..nx {
-                    let lower = if i > 0 { off[i - 1] } else { 0.0 };
-                    let up = if i + 1 < nx { off[i] } else { 0.0 };
-                    if diag[i] <= 0.0 {
-                        upper[i] = 0.0;
-                        o[i] = xr[i];
-                    } else {
-                        let m = diag[i] - lower * prev_upper;
-                        upper[i] = up / m;
-                        o[i] = (b[base + i] - o[i] - lower * prev) / m;
+            || vec![T::ZERO; nx * LINE_GROUP],
+            |upper, (group, og)| {
+                let first = group * LINE_GROUP;
+                let mut active = [0; LINE_GROUP];
+                let mut lanes = 0;
+                for (r, o) in og.chunks_mut(nx).enumerate() {
+                    let row = first + r;
+                    let base = row * nx;
+                    let xr = &x[base..base + nx];
+                    if (row % ny + row / ny) % 2 != color {
+                        o.copy_from_slice(xr);
+                        continue;
                     }
-                    prev_upper = upper[i];
-                    prev = o[i];
+                    o.iter_mut().for_each(|v| *v = T::ZERO);
+                    if a.periodic[0] && nx > 1 {
+                        o[nx - 1] += off[base + nx - 1] * xr[0];
+                        o[0] += off[base + nx - 1] * xr[nx - 1];
+                    }
+                    a.cross_row(row, x, o);
+                    active[lanes] = r;
+                    lanes += 1;
+                }
+                let active = &active[..lanes];
+                // Forward elimination with the stored pivots; a row with no positive
+                // diagonal keeps its value.
+                let mut prev = [T::ZERO; LINE_GROUP];
+                for i in 0..nx {
+                    for (lane, &r) in active.iter().enumerate() {
+                        let c = (first + r) * nx + i;
+                        let o = &mut og[r * nx + i];
+                        let inv = pivots[c];
+                        if inv == T::ZERO {
+                            upper[lane * nx + i] = T::ZERO;
+                            *o = x[c];
+                        } else {
+                            let lower = if i > 0 { off[c - 1] } else { T::ZERO };
+                            let up = if i + 1 < nx { off[c] } else { T::ZERO };
+                            upper[lane * nx + i] = up * inv;
+                            *o = (b[c] - *o - lower * prev[lane]) * inv;
+                        }
+                        prev[lane] = *o;
+                    }
                 }
                 for i in (0..nx.saturating_sub(1)).rev() {
-                    o[i] -= upper[i] * o[i + 1];
+                    for (lane, &r) in active.iter().enumerate() {
+                        let next = og[r * nx + i + 1];
+                        og[r * nx + i] -= upper[lane * nx + i] * next;
+                    }
                 }
             },
         );
 }
 
-fn sweeps(
-    a: &Stencil7,
-    b: &[f64],
-    x: &mut Vec<f64>,
-    tmp: &mut Vec<f64>,
+/// Half-sweeps of the given colours, point or line (`pivots` non-empty) Gauss–Seidel.
+fn sweeps<T: Real>(
+    a: &Stencil7<T>,
+    pivots: &[T],
+    b: &[T],
+    x: &mut Vec<T>,
+    tmp: &mut Vec<T>,
     colors: &[usize],
-    lines: bool,
 ) {
     for &col in colors {
-        if lines {
-            line_half_sweep(a, b, x, tmp, col);
-        } else {
+        if pivots.is_empty() {
             half_sweep(a, b, x, tmp, col);
+        } else {
+            line_half_sweep(a, pivots, b, x, tmp, col);
         }
         std::mem::swap(x, tmp);
     }
 }
 
-impl<'a> Multigrid<'a> {
+impl<'a, T: Real> Multigrid<'a, T> {
     /// Builds the hierarchy below `a`.
-    pub fn new(a: &'a Stencil7) -> Self {
-        let mut coarse: Vec<Stencil7> = Vec::new();
+    pub fn new(a: &'a Stencil7<T>) -> Self {
+        let mut coarse: Vec<Stencil7<T>> = Vec::new();
         loop {
             let last = coarse.last().unwrap_or(a);
             if last.len() <= COARSEST_CELLS || last.dims.iter().all(|&d| d <= 2) {
@@ -214,40 +286,43 @@ impl<'a> Multigrid<'a> {
         }
         let scratch = std::iter::once(a.len())
             .chain(coarse.iter().map(Stencil7::len))
-            .map(|n| Mutex::new([vec![0.0; n], vec![0.0; n], vec![0.0; n]]))
+            .map(|n| Mutex::new([vec![T::ZERO; n], vec![T::ZERO; n], vec![T::ZERO; n]]))
             .collect();
         Self {
             fine: a,
             coarse,
             scratch,
-            lines: false,
+            pivots: Vec::new(),
             smooth: SMOOTH,
         }
     }
 
     /// Builds the hierarchy below `a`, smoothing with red–black x-line Gauss–Seidel.
-    pub fn with_line_smoothing(a: &'a Stencil7) -> Self {
-        Self {
-            lines: true,
-            smooth: LINE_SMOOTH,
-            ..Self::new(a)
-        }
+    pub fn with_line_smoothing(a: &'a Stencil7<T>) -> Self {
+        let mut mg = Self::new(a);
+        mg.pivots = (0..=mg.coarse.len())
+            .map(|l| line_pivots(mg.level(l)))
+            .collect();
+        mg.smooth = LINE_SMOOTH;
+        mg
     }
 
-    /// Bytes held by the coarse levels and the work vectors of every level.
+    /// Bytes held by the coarse levels, the line pivots and the work vectors of every level.
     pub fn memory_bytes(&self) -> usize {
         let work: usize = std::iter::once(self.fine.len())
             .chain(self.coarse.iter().map(Stencil7::len))
-            .map(|n| 3 * n * std::mem::size_of::<f64>())
+            .map(|n| 3 * n * std::mem::size_of::<T>())
             .sum();
+        let pivots: usize = self.pivots.iter().map(Vec::len).sum();
         self.coarse
             .iter()
             .map(Stencil7::memory_bytes)
             .sum::<usize>()
             + work
+            + pivots * std::mem::size_of::<T>()
     }
 
-    fn level(&self, l: usize) -> &Stencil7 {
+    fn level(&self, l: usize) -> &Stencil7<T> {
         if l == 0 {
             self.fine
         } else {
@@ -255,29 +330,35 @@ impl<'a> Multigrid<'a> {
         }
     }
 
+    /// Line pivots of level `l` (empty for point smoothing).
+    fn level_pivots(&self, l: usize) -> &[T] {
+        self.pivots.get(l).map_or(&[], Vec::as_slice)
+    }
+
     /// One V-cycle from a zero guess for A·x = b on level `l`; the result is left in
     /// `scratch[l][0]`.
-    fn vcycle(&self, l: usize, b: &[f64]) {
+    fn vcycle(&self, l: usize, b: &[T]) {
         let a = self.level(l);
+        let piv = self.level_pivots(l);
         let mut guard = self.scratch[l]
             .lock()
             .unwrap_or_else(PoisonError::into_inner);
         let [x, tmp, _] = &mut *guard;
-        x.par_iter_mut().for_each(|v| *v = 0.0);
+        x.par_iter_mut().for_each(|v| *v = T::ZERO);
         if l == self.coarse.len() {
             for _ in 0..COARSEST_SWEEPS {
-                sweeps(a, b, x, tmp, &[0, 1], self.lines);
+                sweeps(a, piv, b, x, tmp, &[0, 1]);
             }
             for _ in 0..COARSEST_SWEEPS {
-                sweeps(a, b, x, tmp, &[1, 0], self.lines);
+                sweeps(a, piv, b, x, tmp, &[1, 0]);
             }
             return;
         }
         for _ in 0..self.smooth {
-            sweeps(a, b, x, tmp, &[0, 1], self.lines);
+            sweeps(a, piv, b, x, tmp, &[0, 1]);
         }
         a.apply(x, tmp);
-        tmp.par_iter_mut().zip(b).for_each(|(t, bi)| *t = bi - *t);
+        tmp.par_iter_mut().zip(b).for_each(|(t, &bi)| *t = bi - *t);
         let c = self.level(l + 1);
         let cd = c.dims;
         let fd = a.dims;
@@ -285,21 +366,27 @@ impl<'a> Multigrid<'a> {
         let mut next = self.scratch[l + 1]
             .lock()
             .unwrap_or_else(PoisonError::into_inner);
-        let rc = &mut next[2];
-        par_fill(cd, rc, |pc| {
-            let mut s = 0.0;
-            for dk in 0..2 {
-                for dj in 0..2 {
-                    for di in 0..2 {
-                        let p = [2 * pc[0] + di, 2 * pc[1] + dj, 2 * pc[2] + dk];
-                        if p[0] < fd[0] && p[1] < fd[1] && p[2] < fd[2] {
-                            s += resid[idx(fd, p)];
+        let (cnx, cny) = (cd[0], cd[1]);
+        next[2]
+            .par_chunks_mut(cnx)
+            .enumerate()
+            .for_each(|(row, out)| {
+                let (jc, kc) = (row % cny, row / cny);
+                for (ic, o) in out.iter_mut().enumerate() {
+                    let mut s = T::ZERO;
+                    for dk in 0..2 {
+                        for dj in 0..2 {
+                            for di in 0..2 {
+                                let p = [2 * ic + di, 2 * jc + dj, 2 * kc + dk];
+                                if p[0] < fd[0] && p[1] < fd[1] && p[2] < fd[2] {
+                                    s += resid[idx(fd, p)];
+                                }
+                            }
                         }
                     }
+                    *o = s;
                 }
-            }
-            s
-        });
+            });
         let rc = std::mem::take(&mut next[2]);
         drop(next);
         self.vcycle(l + 1, &rc);
@@ -322,16 +409,14 @@ impl<'a> Multigrid<'a> {
             });
         drop(next);
         for _ in 0..self.smooth {
-            sweeps(a, b, x, tmp, &[1, 0], self.lines);
+            sweeps(a, piv, b, x, tmp, &[1, 0]);
         }
     }
-}
 
-impl Multigrid<'_> {
     /// One V-cycle whose right-hand side `fill` writes and whose result `read` takes, both
     /// in the level-0 work vectors (the restricted-residual slot is free on level 0), so a
     /// caller that renumbers vectors needs no copies of its own.
-    pub fn apply_with(&self, fill: impl FnOnce(&mut [f64]), read: impl FnOnce(&[f64])) {
+    pub fn apply_with(&self, fill: impl FnOnce(&mut [T]), read: impl FnOnce(&[T])) {
         let mut rhs = {
             let mut guard = self.scratch[0]
                 .lock()
@@ -348,7 +433,7 @@ impl Multigrid<'_> {
     }
 }
 
-impl Preconditioner for Multigrid<'_> {
+impl Preconditioner for Multigrid<'_, f64> {
     fn apply(&self, r: &[f64], z: &mut [f64]) {
         self.vcycle(0, r);
         let guard = self.scratch[0]
@@ -453,7 +538,7 @@ mod tests {
         a.apply(&x_true, &mut b);
         let mut x = vec![0.0; n];
         let mut tmp = vec![0.0; n];
-        sweeps(&a, &b, &mut x, &mut tmp, &[0, 1], true);
+        sweeps(&a, &line_pivots(&a), &b, &mut x, &mut tmp, &[0, 1]);
         for (c, (got, want)) in x.iter().zip(&x_true).enumerate() {
             // Tridiagonal elimination with pivots up to ~6e4 against entries of order 1:
             // round-off well below 1e-9 of the values.

@@ -3,7 +3,7 @@
 
 use crate::config::LinearSolverSettings;
 use crate::error::SolverError;
-use crate::linalg::vecops::{axpy, dot, first_non_finite, xpby};
+use crate::linalg::vecops::{dot, first_non_finite, step_and_norm, xpby};
 use rayon::prelude::*;
 
 /// A symmetric linear operator y = A·x.
@@ -27,30 +27,33 @@ pub struct SolveStats {
     pub residual: f64,
 }
 
-/// Solves A·x = b from the initial guess in `x`.
+/// Solves A·x = b from the initial guess in `x`; `b` becomes the residual vector, so CG holds
+/// four vectors (x, r, p, q), the preconditioned residual z sharing q's storage: q = A·p is dead
+/// from the residual update until the next product.
 pub(crate) fn pcg(
     a: &dyn LinearOperator,
     m: &dyn Preconditioner,
-    b: &[f64],
+    b: Vec<f64>,
     x: &mut [f64],
     settings: &LinearSolverSettings,
     system: &'static str,
 ) -> Result<SolveStats, SolverError> {
-    if let Some(index) = first_non_finite(b) {
+    if let Some(index) = first_non_finite(&b) {
         return Err(SolverError::NonFinite {
             what: system,
             index,
         });
     }
     let n = b.len();
-    let bnorm = dot(b, b).sqrt();
+    let bnorm = dot(&b, &b).sqrt();
     if bnorm == 0.0 {
         x.par_iter_mut().for_each(|v| *v = 0.0);
         return Ok(SolveStats::default());
     }
-    let mut r = vec![0.0; n];
-    a.apply(x, &mut r);
-    r.par_iter_mut().zip(b).for_each(|(ri, bi)| *ri = bi - *ri);
+    let mut q = vec![0.0; n];
+    a.apply(x, &mut q);
+    let mut r = b;
+    r.par_iter_mut().zip(&q).for_each(|(ri, qi)| *ri -= qi);
     let mut res = dot(&r, &r).sqrt() / bnorm;
     if res <= settings.tolerance {
         return Ok(SolveStats {
@@ -58,11 +61,9 @@ pub(crate) fn pcg(
             residual: res,
         });
     }
-    let mut z = vec![0.0; n];
-    m.apply(&r, &mut z);
-    let mut p = z.clone();
-    let mut q = vec![0.0; n];
-    let mut rz = dot(&r, &z);
+    m.apply(&r, &mut q);
+    let mut p = q.clone();
+    let mut rz = dot(&r, &q);
     for it in 1..=settings.max_iterations {
         a.apply(&p, &mut q);
         let pq = dot(&p, &q);
@@ -82,9 +83,7 @@ pub(crate) fn pcg(
             });
         }
         let alpha = rz / pq;
-        axpy(alpha, &p, x);
-        axpy(-alpha, &q, &mut r);
-        res = dot(&r, &r).sqrt() / bnorm;
+        res = step_and_norm(alpha, &p, &q, x, &mut r).sqrt() / bnorm;
         if !res.is_finite() {
             return Err(SolverError::NonFinite {
                 what: system,
@@ -97,9 +96,9 @@ pub(crate) fn pcg(
                 residual: res,
             });
         }
-        m.apply(&r, &mut z);
-        let rz_new = dot(&r, &z);
-        xpby(&z, rz_new / rz, &mut p);
+        m.apply(&r, &mut q);
+        let rz_new = dot(&r, &q);
+        xpby(&q, rz_new / rz, &mut p);
         rz = rz_new;
     }
     Err(SolverError::NotConverged {

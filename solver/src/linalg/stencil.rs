@@ -5,28 +5,76 @@
 
 use crate::layout::idx;
 use rayon::prelude::*;
+use std::ops::{Add, AddAssign, Div, Mul, Sub, SubAssign};
+
+/// Storage precision of a [`Stencil7`] and of the multigrid hierarchy on it: f64 where the
+/// matrix is the operator itself (pressure), f32 where it only preconditions (viscosity), which
+/// halves the memory and the bandwidth of every sweep.
+pub(crate) trait Real:
+    Copy
+    + Send
+    + Sync
+    + PartialOrd
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + AddAssign
+    + SubAssign
+    + 'static
+{
+    const ZERO: Self;
+    /// Nearest value to `v`.
+    fn from_f64(v: f64) -> Self;
+    /// Exact widening.
+    fn to_f64(self) -> f64;
+}
+
+impl Real for f64 {
+    const ZERO: Self = 0.0;
+    #[inline]
+    fn from_f64(v: f64) -> Self {
+        v
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+impl Real for f32 {
+    const ZERO: Self = 0.0;
+    #[inline]
+    fn from_f64(v: f64) -> Self {
+        v as f32
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        f64::from(self)
+    }
+}
 
 /// A symmetric matrix with entries only between axis neighbours.
 #[derive(Clone, Debug)]
-pub(crate) struct Stencil7 {
+pub(crate) struct Stencil7<T = f64> {
     pub dims: [usize; 3],
     pub periodic: [bool; 3],
     /// Diagonal entries.
-    pub diag: Vec<f64>,
+    pub diag: Vec<T>,
     /// `off[d][c]`: entry between c and its +d neighbour (wrapped when periodic; 0 at the end
     /// of a non-periodic axis). Non-positive for the M-matrices built here.
-    pub off: [Vec<f64>; 3],
+    pub off: [Vec<T>; 3],
 }
 
-impl Stencil7 {
+impl<T: Real> Stencil7<T> {
     /// All-zero matrix.
     pub fn zeros(dims: [usize; 3], periodic: [bool; 3]) -> Self {
         let n = dims[0] * dims[1] * dims[2];
         Self {
             dims,
             periodic,
-            diag: vec![0.0; n],
-            off: [vec![0.0; n], vec![0.0; n], vec![0.0; n]],
+            diag: vec![T::ZERO; n],
+            off: [vec![T::ZERO; n], vec![T::ZERO; n], vec![T::ZERO; n]],
         }
     }
 
@@ -37,7 +85,7 @@ impl Stencil7 {
 
     /// Bytes held by the matrix.
     pub fn memory_bytes(&self) -> usize {
-        4 * self.len() * std::mem::size_of::<f64>()
+        4 * self.len() * std::mem::size_of::<T>()
     }
 
     /// Index of the +d neighbour of `p`, None past a non-periodic end.
@@ -62,13 +110,13 @@ impl Stencil7 {
 
     /// Off-diagonal part of A·x for x-row `row` (fixed j, k) into `acc`: whole rows at a time
     /// so the inner loops are straight strided sweeps.
-    pub fn offdiag_row(&self, row: usize, x: &[f64], acc: &mut [f64]) {
+    pub fn offdiag_row(&self, row: usize, x: &[T], acc: &mut [T]) {
         let nx = self.dims[0];
         let base = row * nx;
         let o0 = &self.off[0][base..base + nx];
         let xr = &x[base..base + nx];
         for i in 0..nx {
-            let mut s = 0.0;
+            let mut s = T::ZERO;
             if i + 1 < nx {
                 s += o0[i] * xr[i + 1];
             }
@@ -86,7 +134,7 @@ impl Stencil7 {
 
     /// Adds the y and z couplings of x-row `row` (fixed j, k) to `acc`: the part of A·x that
     /// comes from other rows.
-    pub fn cross_row(&self, row: usize, x: &[f64], acc: &mut [f64]) {
+    pub fn cross_row(&self, row: usize, x: &[T], acc: &mut [T]) {
         let [nx, ny, nz] = self.dims;
         let (j, k) = (row % ny, row / ny);
         let base = row * nx;
@@ -122,7 +170,7 @@ impl Stencil7 {
             } else {
                 &self.off[d][ob..ob + nx]
             };
-            for ((a, c), xv) in acc.iter_mut().zip(coupling).zip(xo) {
+            for ((a, &c), &xv) in acc.iter_mut().zip(coupling).zip(xo) {
                 *a += c * xv;
             }
         }
@@ -149,7 +197,7 @@ impl Stencil7 {
     }
 
     /// y = A·x, parallel over x-rows.
-    pub fn apply(&self, x: &[f64], y: &mut [f64]) {
+    pub fn apply(&self, x: &[T], y: &mut [T]) {
         let nx = self.dims[0];
         y.par_chunks_mut(nx).enumerate().for_each(|(row, yr)| {
             self.offdiag_row(row, x, yr);
@@ -180,11 +228,22 @@ pub(crate) fn up_neighbour(
     Some(idx(dims, q))
 }
 
+/// The axes in the order [`rotate`] numbers them: `a`, then the other two in natural order,
+/// so consecutive rows stay neighbours in memory and renumbering runs through the cache.
+pub(crate) fn first_axes(a: usize) -> [usize; 3] {
+    match a {
+        0 => [0, 1, 2],
+        1 => [1, 0, 2],
+        _ => [2, 0, 1],
+    }
+}
+
 /// `dst` = `src` (values on a box of `dims`) renumbered with axis `a` first: p moves to
-/// (p[a], p[a+1], p[a+2]) mod 3. Line smoothing runs along the contiguous first axis, so this
-/// puts any axis there.
-pub(crate) fn rotate(dims: [usize; 3], a: usize, src: &[f64], dst: &mut [f64]) {
-    let axes = [a, (a + 1) % 3, (a + 2) % 3];
+/// (p[axes[0]], p[axes[1]], p[axes[2]]), axes = [`first_axes`]. Line smoothing runs along the
+/// contiguous first axis, so this puts any axis there. Values convert between the two
+/// precisions on the way.
+pub(crate) fn rotate<S: Real, D: Real>(dims: [usize; 3], a: usize, src: &[S], dst: &mut [D]) {
+    let axes = first_axes(a);
     let rd = axes.map(|d| dims[d]);
     dst.par_chunks_mut(rd[0])
         .enumerate()
@@ -195,21 +254,22 @@ pub(crate) fn rotate(dims: [usize; 3], a: usize, src: &[f64], dst: &mut [f64]) {
                 p[axes[0]] = q0;
                 p[axes[1]] = q1;
                 p[axes[2]] = q2;
-                *o = src[idx(dims, p)];
+                *o = D::from_f64(src[idx(dims, p)].to_f64());
             }
         });
 }
 
 /// Inverse of [`rotate`]: `dst` (on a box of `dims`) from `src` numbered with axis `a` first.
-pub(crate) fn unrotate(dims: [usize; 3], a: usize, src: &[f64], dst: &mut [f64]) {
-    let rd = [dims[a], dims[(a + 1) % 3], dims[(a + 2) % 3]];
+pub(crate) fn unrotate<S: Real, D: Real>(dims: [usize; 3], a: usize, src: &[S], dst: &mut [D]) {
+    let axes = first_axes(a);
+    let rd = axes.map(|d| dims[d]);
     dst.par_chunks_mut(dims[0])
         .enumerate()
         .for_each(|(row, out)| {
             let (j, k) = (row % dims[1], row / dims[1]);
             for (i, o) in out.iter_mut().enumerate() {
                 let p = [i, j, k];
-                *o = src[idx(rd, [p[a], p[(a + 1) % 3], p[(a + 2) % 3]])];
+                *o = D::from_f64(src[idx(rd, axes.map(|d| p[d]))].to_f64());
             }
         });
 }
@@ -237,17 +297,11 @@ mod tests {
         let mut ax = vec![0.0; s.len()];
         s.apply(&x, &mut ax);
         for a in 0..3 {
-            let mut r = Stencil7::zeros(
-                [s.dims[a], s.dims[(a + 1) % 3], s.dims[(a + 2) % 3]],
-                [
-                    s.periodic[a],
-                    s.periodic[(a + 1) % 3],
-                    s.periodic[(a + 2) % 3],
-                ],
-            );
+            let axes = first_axes(a);
+            let mut r = Stencil7::zeros(axes.map(|d| s.dims[d]), axes.map(|d| s.periodic[d]));
             rotate(s.dims, a, &s.diag, &mut r.diag);
-            for d in 0..3 {
-                rotate(s.dims, a, &s.off[(a + d) % 3], &mut r.off[d]);
+            for (out, &d) in r.off.iter_mut().zip(&axes) {
+                rotate(s.dims, a, &s.off[d], out);
             }
             let (mut xr, mut axr, mut rax) = (vec![0.0; s.len()], vec![0.0; s.len()], vec![]);
             rotate(s.dims, a, &x, &mut xr);

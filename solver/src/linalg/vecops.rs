@@ -27,11 +27,24 @@ pub(crate) fn max_abs(a: &[f64]) -> f64 {
     a.par_iter().map(|v| v.abs()).reduce(|| 0.0, f64::max)
 }
 
-/// y += alpha·x.
-pub(crate) fn axpy(alpha: f64, x: &[f64], y: &mut [f64]) {
-    y.par_iter_mut()
-        .zip(x)
-        .for_each(|(yi, xi)| *yi += alpha * xi);
+/// The CG step x += alpha·p, r −= alpha·q in one pass, returning the new r·r (summed in the
+/// same fixed chunks as [`dot`], so deterministic).
+pub(crate) fn step_and_norm(alpha: f64, p: &[f64], q: &[f64], x: &mut [f64], r: &mut [f64]) -> f64 {
+    let partial: Vec<f64> = x
+        .par_chunks_mut(CHUNK)
+        .zip(r.par_chunks_mut(CHUNK))
+        .zip(p.par_chunks(CHUNK).zip(q.par_chunks(CHUNK)))
+        .map(|((xc, rc), (pc, qc))| {
+            let mut s = 0.0;
+            for (((xi, ri), pi), qi) in xc.iter_mut().zip(rc.iter_mut()).zip(pc).zip(qc) {
+                *xi += alpha * pi;
+                *ri -= alpha * qi;
+                s += *ri * *ri;
+            }
+            s
+        })
+        .collect();
+    partial.iter().sum()
 }
 
 /// p = z + beta·p.
