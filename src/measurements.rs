@@ -2,7 +2,8 @@
 //! share, and the scene's declared measurements (`[[measure]]`): a front is a
 //! number, tips are `{min, max}`, a centroid is `[x, y, z]`, pieces are a list of
 //! `{volume, centroid, radius, nearest, farthest}`, a velocity profile is
-//! `{position: [..], value: [..]}`; `null` where the phase is gone.
+//! `{position: [..], value: [..]}`, contact angles are `{phase: degrees}`; `null` where the
+//! phase (or the triple point) is gone.
 
 use anyhow::Result;
 use polyphase_coupling::{measure, Measured};
@@ -19,6 +20,7 @@ pub fn add_measurements(
     mesh: &LabeledMesh,
     fluid: &dyn Fn(&MeasureKind) -> Result<Value>,
 ) -> Result<()> {
+    let names = scene.phase_names();
     for m in &scene.measures {
         if let MeasureKind::RiseVelocity { .. }
         | MeasureKind::VelocityProfile { .. }
@@ -43,6 +45,16 @@ pub fn add_measurements(
                     "farthest": p.farthest,
                 }))
                 .collect::<Vec<_>>()),
+            Measured::Angles(angles) => match (angles, &m.kind) {
+                (Some(angles), MeasureKind::ContactAngles { phases, .. }) => Value::Object(
+                    phases
+                        .iter()
+                        .zip(angles)
+                        .map(|(&p, a)| (names[usize::from(p)].clone(), json!(a)))
+                        .collect(),
+                ),
+                _ => Value::Null,
+            },
         };
     }
     Ok(())

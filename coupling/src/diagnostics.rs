@@ -1,9 +1,12 @@
 //! Measurements of the interface for stats, as declared by the scene's `[[measure]]` tables:
-//! fronts, tips, centroids, connected pieces of a phase and a slab's circularity.
+//! fronts, tips, centroids, connected pieces of a phase, a slab's circularity and contact
+//! angles.
 
 use glam::DVec3;
 use polyphase_scenes::MeasureKind;
 use polyphase_tracker::{LabeledMesh, PhaseId, OUTSIDE};
+
+use crate::contact_angle::contact_angles;
 
 /// One measurement's value; `None` when the phase or interface is gone.
 #[derive(Clone, Debug, PartialEq)]
@@ -16,6 +19,8 @@ pub enum Measured {
     Point(Option<DVec3>),
     /// Connected pieces, in the order of their first triangle in the mesh.
     Pieces(Vec<Piece>),
+    /// One angle (degrees) per phase asked for (contact angles).
+    Angles(Option<[f64; 3]>),
 }
 
 /// One connected piece of a phase.
@@ -58,6 +63,9 @@ pub fn measure(mesh: &LabeledMesh, kind: &MeasureKind) -> Measured {
                 .filter(|s| s.area > 0.0 && s.perimeter > 0.0)
                 .map(|s| 2.0 * (std::f64::consts::PI * s.area).sqrt() / s.perimeter),
         ),
+        MeasureKind::ContactAngles { phases, reach } => {
+            Measured::Angles(contact_angles(mesh, phases, reach))
+        }
         MeasureKind::RiseVelocity { .. }
         | MeasureKind::VelocityProfile { .. }
         | MeasureKind::PressureJump { .. } => Measured::Value(None),

@@ -3,8 +3,11 @@
 //! the per-phase density and viscosity of the next solver step. The tracker may run finer.
 #![deny(unsafe_code)]
 
+pub mod contact_angle;
 pub mod diagnostics;
 pub mod error;
+pub mod junction;
+pub mod line_tension;
 pub mod pending;
 pub mod rt_theory;
 pub mod setup;

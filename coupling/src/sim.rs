@@ -309,8 +309,9 @@ impl<T: InterfaceTracker> CoupledSim<T> {
                 c.faces += stats.faces;
                 c.missed += stats.missed;
                 report.add("tension", t.elapsed().as_secs_f64());
+                let lines = tension.line_forces();
                 self.solver
-                    .step_with_jumps(&field, &self.phases, dt, &jumps)?
+                    .step_with_tension(&field, &self.phases, dt, &jumps, &lines)?
             }
             None => self.solver.step(&field, &self.phases, dt)?,
         };

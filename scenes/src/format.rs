@@ -72,7 +72,8 @@ pub struct TensionSpec {
 /// outside], coupled scenes): the mean pressure of the inside phase's solver cells minus the
 /// outside phase's (a static drop's Laplace jump); `circularity` (phase, slab scenes): the
 /// perimeter of the circle of the phase's cross-sectional area over the perimeter of its
-/// interfaces, cut at the slab's mid-plane.
+/// interfaces, cut at the slab's mid-plane; `contact_angles` (phases = [a, b, c]): the angle
+/// of each phase's wedge where the three meet, averaged along their triple curves.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeasureSpec {

@@ -35,6 +35,10 @@ pub enum MeasureKind {
     /// phase's interfaces with other phases (Hysing et al. 2009's measure of a 2D bubble's
     /// deformation; 1 for a disc). Slab scenes only.
     Circularity { phase: PhaseId, z: f64 },
+    /// The angles (degrees) of the wedges of three `phases` where they meet, averaged along
+    /// their triple curves, each interface's direction fitted over `reach` (m) of it: a lens's
+    /// contact angles, which Neumann's triangle fixes at rest.
+    ContactAngles { phases: [PhaseId; 3], reach: f64 },
 }
 
 /// A validated measurement with its stats key.
@@ -48,12 +52,14 @@ const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// Validates the scene's `[[measure]]` tables against its phase names (`coupled`: whether the
 /// scene has a fluid, which `rise_velocity` needs; `slab_mid`: the z of a slab scene's
-/// mid-plane, where `circularity` cuts, `None` for a 3D scene); errors name the table.
+/// mid-plane, where `circularity` cuts, `None` for a 3D scene; `h`: the tracker's cell);
+/// errors name the table.
 pub fn compile_measures(
     specs: &[MeasureSpec],
     phases: &[String],
     coupled: bool,
     slab_mid: Option<f64>,
+    h: f64,
     bad: &dyn Fn(&str, String) -> SceneError,
 ) -> Result<Vec<Measure>, SceneError> {
     let mut out: Vec<Measure> = Vec::with_capacity(specs.len());
@@ -183,12 +189,44 @@ pub fn compile_measures(
                     format!("circularity_{name}"),
                 )
             }
+            "contact_angles" => {
+                let names = spec.phases.as_deref().unwrap_or_default();
+                let [a, b, c] = names else {
+                    return Err(bad(
+                        &place,
+                        "kind 'contact_angles' needs the field 'phases' with three phase names"
+                            .into(),
+                    ));
+                };
+                let ids = [
+                    phase_id(a, "phases")?,
+                    phase_id(b, "phases")?,
+                    phase_id(c, "phases")?,
+                ];
+                if ids[0] == ids[1] || ids[1] == ids[2] || ids[0] == ids[2] {
+                    return Err(bad(
+                        &format!("{place}.phases"),
+                        "needs three different phases".into(),
+                    ));
+                }
+                (
+                    // Over 6 tracker cells, as surface tension's pull on the curve: far enough
+                    // from it to miss the contouring's error at the triple point, near enough
+                    // for a quadratic to hold the bend.
+                    MeasureKind::ContactAngles {
+                        phases: ids,
+                        reach: 6.0 * h,
+                    },
+                    format!("contact_angles_{a}_{b}_{c}"),
+                )
+            }
             other => {
                 return Err(bad(
                     &format!("{place}.kind"),
                     format!(
                         "unknown kind '{other}' (kinds: front, tips, centroid, pieces, \
-                         rise_velocity, velocity_profile, pressure_jump, circularity)"
+                         rise_velocity, velocity_profile, pressure_jump, circularity, \
+                         contact_angles)"
                     ),
                 ))
             }

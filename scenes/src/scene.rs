@@ -168,6 +168,7 @@ impl Scene {
             &phases,
             solver_grid.is_some(),
             slab_mid,
+            grid.h,
             &bad,
         )?;
         let tension = compile_tension(&file.tension, &phases, solver_grid.is_some(), &bad)?;

@@ -14,6 +14,7 @@ use crate::linalg::pcg::SolveStats;
 use crate::linalg::vecops::first_non_finite;
 use crate::mac::MacGrid;
 use crate::phase::{cell_material, face_densities, PhaseProps};
+use crate::point_force::PointForces;
 use crate::sample_viscosity::SampleViscosity;
 use crate::solid::open_fractions;
 use crate::{pressure, viscosity};
@@ -316,15 +317,17 @@ impl Solver {
     }
 
     /// Advances by `dt` with gravity, the pressure jumping by `jumps` across interface faces
-    /// (surface tension's Laplace jump; see [`PressureJumps`]).
-    pub fn step_with_jumps(
+    /// (surface tension's Laplace jump; see [`PressureJumps`]) and the impulses of `points`
+    /// (its pull along triple curves; see [`PointForces`]).
+    pub fn step_with_tension(
         &mut self,
         field: &PhaseField,
         phases: &[PhaseProps],
         dt: f64,
         jumps: &PressureJumps,
+        points: &PointForces,
     ) -> Result<StepReport, SolverError> {
-        self.step_inner(field, phases, dt, None, Some(jumps))
+        self.step_inner(field, phases, dt, None, Some((jumps, points)))
     }
 
     /// The faces between cells of different phases in `field`, with where the interface
@@ -396,7 +399,7 @@ impl Solver {
         phases: &[PhaseProps],
         dt: f64,
         force: Option<&dyn BodyForce>,
-        jumps: Option<&PressureJumps>,
+        tension: Option<(&PressureJumps, &PointForces)>,
     ) -> Result<StepReport, SolverError> {
         self.check_inputs(field, dt)?;
         let material = cell_material(field, phases)?;
@@ -438,6 +441,9 @@ impl Solver {
         timings.forces = t1.elapsed().as_secs_f64();
 
         let rho = [0, 1, 2].map(|a| face_densities(&material, &vel.layout, a));
+        if let Some((_, points)) = tension {
+            points.apply(&mut vel, open, &rho, dt);
+        }
         let t2 = Instant::now();
         let viscous = material.mu.iter().any(|&m| m > 0.0);
         let viscosity = if viscous {
@@ -457,7 +463,7 @@ impl Solver {
         timings.viscosity = t2.elapsed().as_secs_f64();
 
         let t3 = Instant::now();
-        let dense = jumps.map(|j| j.dense(&vel.layout));
+        let dense = tension.map(|(j, _)| j.dense(&vel.layout));
         let projected = pressure::project(
             &mut vel,
             open,

@@ -6,7 +6,7 @@ mod common;
 
 use common::*;
 use glam::DVec3;
-use polyphase_solver::{PressureJumps, Solver};
+use polyphase_solver::{PointForces, PressureJumps, Solver};
 
 /// A water ball of radius `r` (phase 1) in air, every interface face jumping by the exact
 /// Laplace pressure 2σ/r: (largest speed after `steps` steps, mean pressure inside − outside).
@@ -25,7 +25,8 @@ fn static_drop(steps: usize) -> (f64, f64, f64) {
             .map(|face| (*face, if face.above == 1 { laplace } else { -laplace })),
     );
     for _ in 0..steps {
-        s.step_with_jumps(&f, &WATER_AIR, 1e-3, &jumps).unwrap();
+        s.step_with_tension(&f, &WATER_AIR, 1e-3, &jumps, &PointForces::default())
+            .unwrap();
     }
     let mut speed: f64 = 0.0;
     for a in 0..3 {

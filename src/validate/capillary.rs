@@ -96,8 +96,7 @@ mod tests {
         let a: Vec<f64> = times
             .iter()
             .map(|&t| {
-                1.0 + 0.1 * (-t / 0.6).exp() * (TAU * t / 0.3).cos()
-                    + 0.01 * (TAU * t / 0.07).sin()
+                1.0 + 0.1 * (-t / 0.6).exp() * (TAU * t / 0.3).cos() + 0.01 * (TAU * t / 0.07).sin()
             })
             .collect();
         let counted = crossing_period(&times, &a, 1.0, 0.05).unwrap();

@@ -76,6 +76,11 @@ pub struct MetricSpec {
     /// `surge_front`: the range of T compared.
     #[serde(default)]
     pub window: Option<[f64; 2]>,
+    /// `minimum`, `maximum`, `time_of_*`, `final_value`: a second stats key whose value is
+    /// subtracted from `key`'s in every frame (a width from a `tips` measure: `key =
+    /// "tips.max"`, `minus = "tips.min"`).
+    #[serde(default)]
+    pub minus: Option<String>,
     /// `minimum`, `maximum`, `final_value`: the reference's value of the stats key;
     /// `time_of_minimum`, `time_of_maximum`: the reference's time (s) of that extremum.
     #[serde(default)]

@@ -266,7 +266,13 @@ pub fn evaluate(
             let reference = spec.value.filter(|v| v.is_finite()).with_context(|| {
                 format!("metric '{}' ({kind}) needs a finite `value`", spec.name)
             })?;
-            let values: Vec<f64> = frames.iter().map(|f| number(f, k)).collect::<Result<_>>()?;
+            let values: Vec<f64> = frames
+                .iter()
+                .map(|f| {
+                    let less = spec.minus.as_deref().map_or(Ok(0.0), |m| number(f, m))?;
+                    Ok(number(f, k)? - less)
+                })
+                .collect::<Result<_>>()?;
             let mine: Vec<(f64, f64)> = times.iter().copied().zip(values.iter().copied()).collect();
             let (ours, plot) = if kind == "final_value" {
                 note = Some(format!("at t = {t_end}"));

@@ -268,8 +268,7 @@ impl PairSurface {
         flat: impl Fn(DVec3) -> DVec3,
     ) -> Vec<u32> {
         let r2 = radius * radius;
-        let within =
-            |v: u32| flat(self.mesh.vertices[v as usize] - foot).length_squared() <= r2;
+        let within = |v: u32| flat(self.mesh.vertices[v as usize] - foot).length_squared() <= r2;
         // Every vertex looked at, within the radius or not, so that none is looked at twice.
         let mut seen = Vec::new();
         let mut found = Vec::new();

@@ -208,7 +208,12 @@ fn a_slab_section_is_fitted_as_a_curve() {
     // Both fits see the same vertices; the surface fit also solves for the bending along z
     // from points within ±1 cell of a 4-cell radius, which amplifies the jitter about
     // (4/1)² times: that term is what the section fit leaves out.
-    assert!(curve.1 < 0.2 * surface.1, "spread {} vs {}", curve.1, surface.1);
+    assert!(
+        curve.1 < 0.2 * surface.1,
+        "spread {} vs {}",
+        curve.1,
+        surface.1
+    );
 }
 
 #[test]
