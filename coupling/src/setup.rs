@@ -174,16 +174,22 @@ fn solver_parts(
     let mut config = SolverConfig::closed_box(grid);
     config.gravity = DVec3::from_array(spec.gravity);
     config.boundaries = boundaries(&spec.boundary);
-    let linear = LinearSolverSettings {
-        preconditioner: match spec.preconditioner {
-            PreconditionerSpec::Mic0 => PreconditionerKind::Mic0,
-            PreconditionerSpec::Multigrid => PreconditionerKind::Multigrid,
-        },
+    let kind = |p: PreconditionerSpec| match p {
+        PreconditionerSpec::Mic0 => PreconditionerKind::Mic0,
+        PreconditionerSpec::Multigrid => PreconditionerKind::Multigrid,
+    };
+    // The scene's choice for both solves, else the faster one of each (see `SolverSpec`).
+    let (pressure, viscosity) = spec.preconditioner.map_or(
+        (PreconditionerKind::Multigrid, PreconditionerKind::Mic0),
+        |p| (kind(p), kind(p)),
+    );
+    let linear = |preconditioner| LinearSolverSettings {
+        preconditioner,
         tolerance: spec.tolerance,
         max_iterations: LinearSolverSettings::default().max_iterations,
     };
-    config.pressure = linear;
-    config.viscosity = linear;
+    config.pressure = linear(pressure);
+    config.viscosity = linear(viscosity);
     let solver = Solver::new(config)?;
     let phases = scene
         .file
@@ -225,6 +231,39 @@ mod tests {
             assert_eq!(fresh.max_travel(), 2.5 * h, "{name}, fresh");
             let restored = build_tracker(&scene, fresh.snapshot()).expect("restored").0;
             assert_eq!(restored.max_travel(), 2.5 * h, "{name}, from a checkpoint");
+        }
+    }
+
+    #[test]
+    fn pressure_defaults_to_multigrid_and_a_scene_choice_sets_both_solves() {
+        let kinds = |scene: &Scene| {
+            let (sim, _) = from_scene(scene).expect("coupled");
+            let config = sim.solver().config();
+            (
+                config.pressure.preconditioner,
+                config.viscosity.preconditioner,
+            )
+        };
+        let (_, text) = polyphase_scenes::BUILTIN
+            .iter()
+            .find(|(n, _)| *n == "rayleigh_taylor")
+            .expect("built-in");
+        let default = Scene::parse(text, "rayleigh_taylor").expect("valid");
+        assert_eq!(
+            kinds(&default),
+            (PreconditionerKind::Multigrid, PreconditionerKind::Mic0)
+        );
+        for (name, kind) in [
+            ("mic0", PreconditionerKind::Mic0),
+            ("multigrid", PreconditionerKind::Multigrid),
+        ] {
+            let chosen = text.replacen(
+                "[solver]\n",
+                &format!("[solver]\npreconditioner = \"{name}\"\n"),
+                1,
+            );
+            let scene = Scene::parse(&chosen, "rayleigh_taylor").expect("valid");
+            assert_eq!(kinds(&scene), (kind, kind), "{name}");
         }
     }
 

@@ -3,7 +3,7 @@
 use std::time::Instant;
 
 use glam::DVec3;
-use polyphase_solver::{PhaseProps, Solver, SolverState};
+use polyphase_solver::{MacGrid, PhaseProps, Solver, SolverState};
 use polyphase_tracker::{departure_point, InterfaceTracker, PhaseField, PhaseId, StepStats};
 
 use crate::error::CouplingError;
@@ -113,6 +113,10 @@ pub struct CoupledSim<T: InterfaceTracker> {
     steps: usize,
     pending: Option<PendingSteps>,
     tension: Option<SurfaceTension>,
+    /// The interface velocity of the solver's current state (the last step's end velocity):
+    /// the next step's start velocity, which reads the same faces and owners, so it is kept
+    /// rather than computed again. `None` before the first step and after a restore.
+    end_velocity: Option<MacGrid>,
 }
 
 impl<T: InterfaceTracker> CoupledSim<T> {
@@ -150,6 +154,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
             steps: 0,
             pending: None,
             tension: None,
+            end_velocity: None,
         })
     }
 
@@ -269,6 +274,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         self.time = time;
         self.steps = steps;
         self.pending = None;
+        self.end_velocity = None;
         Ok(())
     }
 
@@ -294,7 +300,10 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         // before the tracker catches up, plus the interpolation stencil.
         let band = (self.control.tracker_travel / grid.h).ceil().min(250.0) as u8 + 2;
         let t1 = Instant::now();
-        let before = self.solver.interface_velocity(&field, &self.phases, band)?;
+        let before = match self.end_velocity.take() {
+            Some(v) => v,
+            None => self.solver.interface_velocity(&field, &self.phases, band)?,
+        };
         let mut interface_secs = t1.elapsed().as_secs_f64();
         let solved = match &self.tension {
             Some(tension) => {
@@ -323,6 +332,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         report.viscosity_iterations += solved.viscosity.map_or(0, |v| v.iterations);
         let t2 = Instant::now();
         let after = self.solver.interface_velocity(&field, &self.phases, band)?;
+        self.end_velocity = Some(after.clone());
         // The interfaces move over the step with the mean of its start and end velocities
         // (trapezoidal rule): the end velocity alone runs a falling drop ahead by g·t·dt/2.
         let mut velocity = after;
