@@ -60,6 +60,30 @@ fn near_sphere(c: DVec3, r: f64, count: usize, seed: u64) -> Vec<DVec3> {
         .collect()
 }
 
+/// A disc of phase 1 of radius `r` cells in phase 0, extruded along z through `depth` cells
+/// of an `n` × `n` grid, and the disc's axis (at z = 0).
+fn disc_mesh(r: f64, n: usize, depth: usize) -> (LabeledMesh, DVec3) {
+    let axis = middle(n);
+    let f = move |x: DVec3| {
+        let d = (x - axis).truncate().length() - r * H;
+        (d.abs(), PhaseId::from(d < 0.0))
+    };
+    (contoured([n, n, depth], &f), axis.truncate().extend(0.0))
+}
+
+/// 1000 random points within one cell of the disc (`axis`, `r` cells) through `depth` cells.
+fn near_disc(axis: DVec3, r: f64, depth: usize, seed: u64) -> Vec<DVec3> {
+    let mut rng = Rng(seed);
+    (0..1000)
+        .map(|_| {
+            let angle = std::f64::consts::TAU * rng.next_f64();
+            let rho = (r + 2.0 * rng.next_f64() - 1.0) * H;
+            let z = depth as f64 * H * rng.next_f64();
+            DVec3::new(axis.x + rho * angle.cos(), axis.y + rho * angle.sin(), z)
+        })
+        .collect()
+}
+
 /// Mean and largest relative error against `exact` of κ(`inside`, `outside`) at `points`
 /// (each within two cells of the pair's interface).
 fn errors(
@@ -119,23 +143,10 @@ fn swapping_the_phases_flips_the_sign() {
 fn curvature_of_a_cylinder_in_a_slab() {
     // A disc of radius 16 cells in a slab six cells thick, extruded along z: the slab's
     // walls cut the neighbourhoods of points near them to one side.
-    let (r, n, depth) = (16.0, 40, 6);
-    let axis = middle(n);
-    let f = move |x: DVec3| {
-        let d = (x - axis).truncate().length() - r * H;
-        (d.abs(), PhaseId::from(d < 0.0))
-    };
-    let mesh = contoured([n, n, depth], &f);
+    let (r, depth) = (16.0, 6);
+    let (mesh, axis) = disc_mesh(r, 40, depth);
     let sampler = CurvatureSampler::new(&mesh, FIT * H);
-    let mut rng = Rng(5);
-    let points: Vec<DVec3> = (0..1000)
-        .map(|_| {
-            let angle = std::f64::consts::TAU * rng.next_f64();
-            let rho = (r + 2.0 * rng.next_f64() - 1.0) * H;
-            let z = depth as f64 * H * rng.next_f64();
-            DVec3::new(axis.x + rho * angle.cos(), axis.y + rho * angle.sin(), z)
-        })
-        .collect();
+    let points = near_disc(axis, r, depth, 5);
     let (mean, worst) = errors(&sampler, &points, 1, 0, 1.0 / (r * H));
     println!(
         "cylinder R = {r} cells: mean {:.3} %, worst {:.3} %",
@@ -163,31 +174,15 @@ fn bias_and_spread(sampler: &CurvatureSampler, points: &[DVec3], exact: f64) -> 
 fn a_slab_section_is_fitted_as_a_curve() {
     // A disc of radius 16 cells in a slab two cells thick, as slab scenes run, fitted over
     // 4 cells as the coupled scenes do, fitted as a surface and as a section.
-    let (r, n, fit) = (16.0, 40, 4.0);
-    let axis = middle(n);
-    let f = move |x: DVec3| {
-        let d = (x - axis).truncate().length() - r * H;
-        (d.abs(), PhaseId::from(d < 0.0))
-    };
-    let mut mesh = contoured([n, n, 2], &f);
+    let (r, fit) = (16.0, 4.0);
+    let (mut mesh, axis) = disc_mesh(r, 40, 2);
     // Each vertex moved radially by up to ±0.02 cells, as a step's resampling moves them.
     let mut jitter = Rng(9);
     for v in &mut mesh.vertices {
         let radial = (*v - axis).truncate().extend(0.0).normalize();
         *v += 0.02 * H * (2.0 * jitter.next_f64() - 1.0) * radial;
     }
-    let mut rng = Rng(8);
-    let points: Vec<DVec3> = (0..1000)
-        .map(|_| {
-            let angle = std::f64::consts::TAU * rng.next_f64();
-            let rho = (r + 2.0 * rng.next_f64() - 1.0) * H;
-            DVec3::new(
-                axis.x + rho * angle.cos(),
-                axis.y + rho * angle.sin(),
-                2.0 * H * rng.next_f64(),
-            )
-        })
-        .collect();
+    let points = near_disc(axis, r, 2, 8);
     let exact = 1.0 / (r * H);
     let surface = bias_and_spread(&CurvatureSampler::new(&mesh, fit * H), &points, exact);
     let curve = bias_and_spread(
