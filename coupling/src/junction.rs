@@ -9,7 +9,7 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use glam::{DVec2, DVec3};
+use glam::{DMat3, DVec2, DVec3};
 use polyphase_tracker::{LabeledMesh, PhaseId, OUTSIDE};
 
 /// One edge of a triple curve.
@@ -143,47 +143,25 @@ pub fn junction_edges(mesh: &LabeledMesh, reach: f64) -> Vec<JunctionEdge> {
 /// one side of it): `w = w₀ + s·u + c·u²` fitted in the frame of the points' mean direction u,
 /// its tangent at u = 0. `None` with fewer than three points or a degenerate fit.
 pub(crate) fn tangent(points: &[DVec2], reach: f64) -> Option<DVec2> {
-    let u_axis = points.iter().sum::<DVec2>().try_normalize()?;
-    let w_axis = u_axis.perp();
-    let (mut m, mut rhs) = ([[0.0; 3]; 3], [0.0; 3]);
-    for d in points {
-        let (u, w) = (d.dot(u_axis) / reach, d.dot(w_axis) / reach);
-        let row = [1.0, u, u * u];
-        for i in 0..3 {
-            for j in 0..3 {
-                m[i][j] += row[i] * row[j];
-            }
-            rhs[i] += row[i] * w;
-        }
-    }
     if points.len() < 3 {
         return None;
     }
-    let slope = solve3(m, rhs)?[1];
-    (u_axis + slope * w_axis).try_normalize()
-}
-
-/// `m x = b` by Cramer's rule; `None` when `m` is (nearly) singular.
-fn solve3(m: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
-    let det = |m: [[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(m);
-    let scale = m[0][0] * m[1][1] * m[2][2];
-    if d.is_nan() || d.abs() <= 1e-12 * scale.abs() {
+    let u_axis = points.iter().sum::<DVec2>().try_normalize()?;
+    let w_axis = u_axis.perp();
+    // Normal equations of the least-squares fit (symmetric, so rows or columns alike).
+    let (mut m, mut rhs) = (DMat3::ZERO, DVec3::ZERO);
+    for d in points {
+        let (u, w) = (d.dot(u_axis) / reach, d.dot(w_axis) / reach);
+        let row = DVec3::new(1.0, u, u * u);
+        m += DMat3::from_cols(row * row.x, row * row.y, row * row.z);
+        rhs += row * w;
+    }
+    let det = m.determinant();
+    if det.is_nan() || det.abs() <= 1e-12 * (m.x_axis.x * m.y_axis.y * m.z_axis.z).abs() {
         return None;
     }
-    let mut x = [0.0; 3];
-    for (k, xk) in x.iter_mut().enumerate() {
-        let mut mk = m;
-        for i in 0..3 {
-            mk[i][k] = b[i];
-        }
-        *xk = det(mk) / d;
-    }
-    Some(x)
+    let slope = (m.inverse() * rhs).y;
+    (u_axis + slope * w_axis).try_normalize()
 }
 
 #[cfg(test)]

@@ -320,7 +320,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
                 report.add("tension", t.elapsed().as_secs_f64());
                 let lines = tension.line_forces();
                 self.solver
-                    .step_with_tension(&field, &self.phases, dt, &jumps, &lines)?
+                    .step_with_tension(&field, &self.phases, dt, &jumps, lines)?
             }
             None => self.solver.step(&field, &self.phases, dt)?,
         };

@@ -25,8 +25,8 @@ pub struct SurfaceTension {
     /// The axis a slab (2D) scene is extruded along: κ is then the section's curvature.
     extrusion: Option<usize>,
     sampler: Option<CurvatureSampler>,
-    /// The pull on the current mesh's triple curves, (point, force in N).
-    junctions: Vec<(DVec3, DVec3)>,
+    /// The pull on the current mesh's triple curves.
+    lines: PointForces,
 }
 
 /// What [`SurfaceTension::jumps`] did at one step.
@@ -49,7 +49,7 @@ impl SurfaceTension {
             fit_radius,
             extrusion,
             sampler: None,
-            junctions: Vec::new(),
+            lines: PointForces::default(),
         }
     }
 
@@ -60,8 +60,9 @@ impl SurfaceTension {
         // over 4, the noise of the sheets next to a triple point pulled one end of an oil lens
         // in (`validation/lens2`: width −9 % at 0.2 s); over 6 the lens holds Neumann's shape
         // to 1.4 %.
-        self.junctions =
-            triple_curve_forces(mesh, 1.5 * self.fit_radius, |a, b| tension.sigma(a, b));
+        self.lines = PointForces::new(triple_curve_forces(mesh, 1.5 * self.fit_radius, |a, b| {
+            tension.sigma(a, b)
+        }));
         let sampler = CurvatureSampler::new(mesh, self.fit_radius);
         self.sampler = Some(match self.extrusion {
             Some(axis) => sampler.extruded_along(axis),
@@ -104,8 +105,8 @@ impl SurfaceTension {
 
     /// The pull of the tensions on the current mesh's triple curves
     /// ([`triple_curve_forces`]), none without any.
-    pub fn line_forces(&self) -> PointForces {
-        PointForces::new(self.junctions.iter().copied())
+    pub fn line_forces(&self) -> &PointForces {
+        &self.lines
     }
 
     /// Half the capillary time-step limit of Brackbill, Kothe & Zemach (1992), Eq. (61),
