@@ -59,7 +59,7 @@ impl SurfaceTension {
         // Directions fitted over 1.5 curvature radii (6 tracker cells in the coupled scenes):
         // over 4, the noise of the sheets next to a triple point pulled one end of an oil lens
         // in (`validation/lens2`: width −9 % at 0.2 s); over 6 the lens holds Neumann's shape
-        // to 1.4 %.
+        // to 7 %.
         self.lines = PointForces::new(triple_curve_forces(mesh, 1.5 * self.fit_radius, |a, b| {
             tension.sigma(a, b)
         }));
