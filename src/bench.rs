@@ -62,6 +62,25 @@ pub enum BenchCommand {
         #[arg(long, default_value = "out/bench-coupled")]
         out: PathBuf,
     },
+    /// Mean-curvature flow of a random Voronoi foam (paper 000 Fig. 24): regions left,
+    /// triangles, T1/T2 events and seconds per substep, one row per frame.
+    Foam {
+        /// Cells of the foam (the paper's run: 2000).
+        #[arg(long, default_value_t = 2000)]
+        regions: i64,
+        /// Seed of the cells' random placement.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Tracker resolution (default: 3.3 cells per mean cell diameter, the paper's sizing).
+        #[arg(long)]
+        res: Option<i64>,
+        /// Simulated end time (default: the built-in `foam` scene's).
+        #[arg(long)]
+        end: Option<f64>,
+        /// Rows over the run (default: the built-in scene's frames).
+        #[arg(long)]
+        frames: Option<i64>,
+    },
     /// Pressure and viscosity solves of a two-phase 1000:1 sphere, MIC(0)-PCG vs multigrid-PCG.
     Solver {
         /// Resolutions, comma separated.
@@ -120,6 +139,19 @@ pub fn bench(cmd: BenchCommand) -> Result<()> {
             threads,
             out,
         } => crate::bench_coupled::run(&scene, &res, frames, threads, &out),
+        BenchCommand::Foam {
+            regions,
+            seed,
+            res,
+            end,
+            frames,
+        } => crate::bench_foam::run(&crate::bench_foam::FoamBench {
+            regions,
+            seed,
+            res,
+            end,
+            frames,
+        }),
         BenchCommand::Solver { res } => {
             let rows = polyphase_solver::bench::run(&res)?;
             println!("{}", polyphase_solver::bench::format_table(&rows));

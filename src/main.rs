@@ -3,6 +3,7 @@
 
 mod bench;
 mod bench_coupled;
+mod bench_foam;
 mod bench_front;
 mod checkpoint;
 mod farm;

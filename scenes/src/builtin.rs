@@ -46,6 +46,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "double_bubble",
         include_str!("../builtin/double_bubble.toml"),
     ),
+    ("foam", include_str!("../builtin/foam.toml")),
 ];
 
 /// (name, bytes) of the OBJ files the built-in scenes use (`file = "NAME"` in a built-in scene,
@@ -251,6 +252,7 @@ mod tests {
                 .filter(|x| matches!(x.primitive, crate::shapes::Primitive::Mesh(_)))
                 .cloned()
                 .collect(),
+            foam: None,
         };
         let v = crate::volume::reference_volumes(&only, &s.grid, s.file.phases.len(), 5);
         let syrup = s.phase_names().iter().position(|n| n == "syrup").unwrap();

@@ -35,7 +35,12 @@ pub struct SceneFile {
     pub solver: Option<SolverSpec>,
     /// Name of the phase that fills every point no shape covers.
     pub background: String,
+    /// With `[foam]`, empty (cells `cell1`…`cellN` are generated) or one phase per cell.
+    #[serde(default)]
     pub phases: Vec<PhaseSpec>,
+    /// A Voronoi foam filling the domain, one phase per cell, instead of `shapes`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub foam: Option<FoamSpec>,
     /// Initial shapes. Where shapes overlap, the one with the higher `priority` wins; shapes of
     /// different phases with the same priority must not overlap (the scene would be ambiguous).
     #[serde(default)]
@@ -410,6 +415,18 @@ fn default_tolerance() -> f64 {
     1e-6
 }
 
+/// A Voronoi foam: `regions` seeds placed uniformly at random (from `seed`) in the domain,
+/// each filling its Voronoi cell with its own phase (paper 000 Fig. 24).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FoamSpec {
+    /// Number of cells, at least 2.
+    pub regions: i64,
+    /// Seed of the seeds' random placement (the same seed gives the same foam).
+    #[serde(default)]
+    pub seed: u64,
+}
+
 /// A phase: physical properties and render hints.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -427,6 +444,19 @@ pub struct PhaseSpec {
     /// Index of refraction, for rendering.
     #[serde(default = "default_ior")]
     pub ior: f64,
+}
+
+impl Default for PhaseSpec {
+    /// An unnamed phase with every property at its default.
+    fn default() -> Self {
+        PhaseSpec {
+            name: String::new(),
+            density: default_density(),
+            viscosity: default_viscosity(),
+            color: default_color(),
+            ior: default_ior(),
+        }
+    }
 }
 
 fn default_density() -> f64 {

@@ -16,6 +16,7 @@ pub mod shapes;
 pub mod tension;
 pub mod velocity;
 pub mod volume;
+pub mod voronoi;
 
 pub use builtin::{builtin, load, BUILTIN, DEFAULT_SCENE};
 pub use error::SceneError;

@@ -12,14 +12,15 @@ use polyphase_tracker::front::flow::{CurlNoise, MeshFlow, PairSpeed};
 use polyphase_tracker::front::params::FrontParams;
 
 use crate::format::{
-    BoundaryKind, BoundarySpec, HalfSpaceSpec, PairSpeedSpec, SceneFile, ShapeSpec, SolverSpec,
-    TrackerKind, TrackerSpec, VelocitySpec, WALLS,
+    BoundaryKind, BoundarySpec, HalfSpaceSpec, PairSpeedSpec, PhaseSpec, SceneFile, ShapeSpec,
+    SolverSpec, TrackerKind, TrackerSpec, VelocitySpec, WALLS,
 };
 use crate::mesh_file::SceneBase;
 use crate::mesh_sdf::MeshSdf;
 use crate::overlap::{find_ambiguous_overlap, DEFAULT_DEPTH as OVERLAP_DEPTH};
 use crate::shapes::{InitialPhases, Primitive, Shape};
 use crate::velocity::AnalyticVelocity;
+use crate::voronoi::Voronoi;
 
 /// Largest accepted tracker resolution: 4096³ nodes is beyond this machine's memory anyway.
 const MAX_RESOLUTION: i64 = 4096;
@@ -115,6 +116,7 @@ impl Scene {
                     .into(),
             ));
         }
+        fill_foam_phases(&mut file, &bad)?;
         let phases = compile_phases(&file, &bad)?;
         let find = |name: &str, place: &str| find_phase(&phases, name, place, &bad);
         let background = find(&file.background, "background")?;
@@ -172,10 +174,22 @@ impl Scene {
             &bad,
         )?;
         let tension = compile_tension(&file.tension, &phases, solver_grid.is_some(), &bad)?;
+        let foam = file.foam.as_ref().map(|f| {
+            Arc::new(Voronoi::random(
+                f.regions as usize,
+                f.seed,
+                grid.origin,
+                grid.upper(),
+            ))
+        });
         Ok(Scene {
             file,
             grid,
-            initial: InitialPhases { background, shapes },
+            initial: InitialPhases {
+                background,
+                shapes,
+                foam,
+            },
             velocity,
             mesh_flow,
             solver_grid,
@@ -225,6 +239,9 @@ impl Scene {
 
     /// The adaptive quadrature behind [`Scene::reference_volumes`].
     fn integrate_reference_volumes(&self) -> Vec<f64> {
+        if let Some(foam) = &self.initial.foam {
+            return foam.cell_volumes();
+        }
         let has_mesh = self
             .initial
             .shapes
@@ -522,6 +539,73 @@ fn compile_mesh_flow(
         },
         _ => return Ok(None),
     }))
+}
+
+/// A foam scene's phases: `cell0`…`cellN−1` in colours spread around the hue circle when the
+/// file lists none, else exactly one listed phase per cell; a foam has no shapes and is 3D.
+fn fill_foam_phases(file: &mut SceneFile, bad: &Bad) -> Result<(), SceneError> {
+    let Some(foam) = &file.foam else {
+        return Ok(());
+    };
+    // Phase ids run up to PhaseId::MAX − 1 (compile_phases), the largest is OUTSIDE's.
+    let most = PhaseId::MAX as i64 - 1;
+    if !(2..=most).contains(&foam.regions) {
+        return Err(bad(
+            "foam.regions",
+            format!("must be between 2 and {most}, got {}", foam.regions),
+        ));
+    }
+    if !file.shapes.is_empty() {
+        return Err(bad(
+            "shapes",
+            "a foam fills the whole domain: remove the shapes or the [foam] table".into(),
+        ));
+    }
+    if file.domain.slab {
+        return Err(bad(
+            "foam",
+            "a foam is three-dimensional: set domain.slab = false".into(),
+        ));
+    }
+    let n = foam.regions as usize;
+    if file.phases.is_empty() {
+        file.phases = (0..n)
+            .map(|k| PhaseSpec {
+                name: format!("cell{k}"),
+                color: hue_color(k),
+                ..PhaseSpec::default()
+            })
+            .collect();
+    } else if file.phases.len() != n {
+        return Err(bad(
+            "phases",
+            format!(
+                "a foam of {n} regions needs no phases (cell0…cell{} are made) or exactly {n}, \
+                 one per cell; got {}",
+                n - 1,
+                file.phases.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Linear RGB of hue `k`·0.618… around the circle (golden-ratio steps keep neighbours in
+/// index far apart in hue), saturation 0.6, value 0.9.
+fn hue_color(k: usize) -> [f64; 3] {
+    let h = (k as f64 * 0.618_033_988_749_895).fract() * 6.0;
+    let (v, s) = (0.9, 0.6);
+    let c = v * s;
+    let x = c * (1.0 - (h % 2.0 - 1.0).abs());
+    let (r, g, b) = match h as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    [r, g, b].map(|u| u + v - c)
 }
 
 fn compile_phases(file: &SceneFile, bad: &Bad) -> Result<Vec<String>, SceneError> {

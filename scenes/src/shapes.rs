@@ -8,6 +8,7 @@ use glam::DVec3;
 use polyphase_grid::PhaseId;
 
 use crate::mesh_sdf::MeshSdf;
+use crate::voronoi::Voronoi;
 
 /// A solid primitive; `sdf` is negative inside.
 #[derive(Clone, Debug, PartialEq)]
@@ -105,18 +106,23 @@ impl Shape {
     }
 }
 
-/// All initial shapes over a background phase.
+/// All initial shapes over a background phase, or a foam filling the domain.
 #[derive(Clone, Debug, PartialEq)]
 pub struct InitialPhases {
     pub background: PhaseId,
     /// In painting order (a later shape wins where shapes overlap): ascending priority, file
     /// order among equals ([`crate::Scene`] sorts them so).
     pub shapes: Vec<Shape>,
+    /// A Voronoi foam (scene `[foam]`, which has no shapes): cell `k` is phase `k`.
+    pub foam: Option<Arc<Voronoi>>,
 }
 
 impl InitialPhases {
-    /// χ(x): the last shape containing x, else the background.
+    /// χ(x): the last shape containing x, else the background; the foam's cell.
     pub fn phase(&self, x: DVec3) -> PhaseId {
+        if let Some(foam) = &self.foam {
+            return foam.cell(x) as PhaseId;
+        }
         self.shapes
             .iter()
             .rev()
@@ -127,6 +133,10 @@ impl InitialPhases {
     /// The boundary nearest to x among all shapes: its |sdf| and unit gradient (the direction
     /// in which that shape's signed distance grows), by central differences.
     pub fn nearest_boundary(&self, x: DVec3) -> Option<(f64, DVec3)> {
+        if let Some(foam) = &self.foam {
+            let (_, d, n) = foam.boundary(x);
+            return n.map(|n| (-d, n));
+        }
         let (_, shape) = self
             .shapes
             .iter()
@@ -141,6 +151,9 @@ impl InitialPhases {
     /// (φ, χ): φ is a lower bound on the distance to the interface (the interface lies on the
     /// union of shape boundaries, and each |sdf| bounds the distance to its boundary).
     pub fn sample(&self, x: DVec3) -> (f64, PhaseId) {
+        if let Some(foam) = &self.foam {
+            return foam.sample(x);
+        }
         let mut phi = f64::INFINITY;
         let mut chi = self.background;
         for s in &self.shapes {
@@ -189,6 +202,7 @@ mod tests {
         let p = InitialPhases {
             background: 0,
             shapes: vec![sphere, half],
+            foam: None,
         };
         assert_eq!(p.phase(DVec3::new(0.4, 0.5, 0.5)), 2);
         assert_eq!(p.phase(DVec3::new(0.6, 0.5, 0.5)), 1);

@@ -132,6 +132,7 @@ mod tests {
         let initial = InitialPhases {
             background: 0,
             shapes: vec![sphere, wedge],
+            foam: None,
         };
         let grid = GridSpec {
             origin: DVec3::ZERO,

@@ -21,7 +21,7 @@ use super::flow::{FlowStep, MeshFlow};
 use super::intersection::self_intersections;
 use super::params::{FrontParams, Integrator};
 use super::remesh::{improve, RemeshStats};
-use super::response::{resolve, CollisionParams};
+use super::response::{resolve_pinned, CollisionParams};
 use super::topology::regions::regions;
 use crate::contour::PhaseSampler;
 use crate::contour_tracker::ContourTracker;
@@ -356,7 +356,15 @@ impl FrontTracker {
         let mut x1 = self.integrate(motion, &x0, t, dt)?;
         self.report.substeps += 1;
         let integrated = Instant::now();
-        let resolved = resolve(&self.c.mesh.triangles, &x0, &mut x1, &self.collision).is_ok();
+        let pinned = self.fixed_coordinates();
+        let resolved = resolve_pinned(
+            &self.c.mesh.triangles,
+            &x0,
+            &mut x1,
+            &pinned,
+            &self.collision,
+        )
+        .is_ok();
         self.seconds[0] += (integrated - start).as_secs_f64();
         self.seconds[1] += integrated.elapsed().as_secs_f64();
         if resolved {

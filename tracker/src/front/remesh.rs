@@ -216,6 +216,10 @@ impl<'a> Remesher<'a> {
     ) -> bool {
         let ok = if new.iter().any(|t| t.area().is_nan() || t.area() <= 0.0) {
             false
+        } else if moves_the_domain_boundary(old, new) {
+            // Not even the fail-safe may: a boundary face turned off its wall (a flip across a
+            // box edge, a collapse between two walls) takes volume from the domain for good.
+            false
         } else if self.failsafe {
             true
         } else {
@@ -346,6 +350,29 @@ fn volume_change(old: &[Tri], new: &[Tri]) -> f64 {
         }
     }
     change.iter().map(|(_, v)| v.abs()).fold(0.0, f64::max)
+}
+
+/// Does replacing `old` by `new` change the volume the domain boundary faces (`OUTSIDE`
+/// labels) enclose by more than rounding? Sliding within a planar wall changes it by nothing.
+fn moves_the_domain_boundary(old: &[Tri], new: &[Tri]) -> bool {
+    let Some(first) = old.first() else {
+        return false;
+    };
+    let r = first.p[0];
+    let (mut change, mut scale) = (0.0, 0.0);
+    for (tris, sign) in [(old, -1.0), (new, 1.0)] {
+        for t in tris.iter().filter(|t| t.labels.contains(&OUTSIDE)) {
+            let [a, b, c] = t.p.map(|p| p - r);
+            let v = a.dot(b.cross(c)) / 6.0;
+            // The domain is the face's non-`OUTSIDE` side (as in `volume_change`).
+            let inside = if t.labels[0] == OUTSIDE { v } else { -v };
+            change += sign * inside;
+            scale += v.abs();
+        }
+    }
+    // Each tetra volume carries a relative rounding error of a few ulps; a billionth of
+    // their sum is far above that and far below any real off-wall move of a remeshing step.
+    change.abs() > 1e-9 * scale
 }
 
 /// Triangle `tri` rotated so that it starts with the directed edge `(a, b)`, or `None` when it

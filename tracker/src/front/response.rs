@@ -14,7 +14,8 @@
 //!    CCD finds nothing. Rotations are dropped: linearly interpolated rotations are not
 //!    rigid and could collide inside a zone.
 //!
-//! All vertices weigh the same. Impulses are applied one contact at a time in the
+//! All vertices weigh the same, except that coordinates pinned by a domain wall
+//! ([`resolve_pinned`]) take no share of an impulse (infinite mass along that axis). Impulses are applied one contact at a time in the
 //! deterministic order of [`super::collision::detect`], so results do not depend on the thread count.
 
 pub mod proximity;
@@ -77,6 +78,8 @@ pub enum UnresolvedCause {
     NonFinite { vertex: usize },
     #[error("{contacts} contacts remain after {rounds} impact-zone rounds")]
     ContactsRemain { contacts: usize, rounds: usize },
+    #[error("an impact zone moved pinned vertex {vertex}")]
+    PinnedMoved { vertex: usize },
 }
 
 /// Changes the proposed end positions `x1` so that the linear motion from `x0` (which must be
@@ -86,6 +89,54 @@ pub fn resolve(
     triangles: &[[u32; 3]],
     x0: &[DVec3],
     x1: &mut [DVec3],
+    params: &CollisionParams,
+) -> Result<ResolveStats, Unresolved> {
+    resolve_pinned(triangles, x0, x1, &[], params)
+}
+
+/// [`resolve`] where `pinned[v][k]` holds coordinate `k` of vertex `v` where `x1` has it
+/// (a vertex sliding on a wall keeps its wall coordinate): impulses move only free
+/// coordinates. Impact zones still translate their pinned members whole, so a result that
+/// moved a pinned coordinate is an error and the caller cuts the step. An empty `pinned`
+/// pins nothing.
+pub fn resolve_pinned(
+    triangles: &[[u32; 3]],
+    x0: &[DVec3],
+    x1: &mut [DVec3],
+    pinned: &[[bool; 3]],
+    params: &CollisionParams,
+) -> Result<ResolveStats, Unresolved> {
+    let proposed: Vec<DVec3> = pinned.iter().zip(x1.iter()).map(|(_, &p)| p).collect();
+    let stats = resolve_with(triangles, x0, x1, Pins(pinned), params)?;
+    if let Some(vertex) =
+        (0..proposed.len()).find(|&v| (0..3).any(|k| pinned[v][k] && x1[v][k] != proposed[v][k]))
+    {
+        return Err(Unresolved {
+            cause: UnresolvedCause::PinnedMoved { vertex },
+        });
+    }
+    Ok(stats)
+}
+
+/// Which coordinates impulses may move.
+#[derive(Clone, Copy)]
+struct Pins<'a>(&'a [[bool; 3]]);
+
+impl Pins<'_> {
+    /// 1 for each free coordinate of `v`, 0 for each pinned one.
+    fn free(&self, v: u32) -> DVec3 {
+        match self.0.get(v as usize) {
+            Some(p) => DVec3::from_array(p.map(|pinned| if pinned { 0.0 } else { 1.0 })),
+            None => DVec3::ONE,
+        }
+    }
+}
+
+fn resolve_with(
+    triangles: &[[u32; 3]],
+    x0: &[DVec3],
+    x1: &mut [DVec3],
+    pins: Pins,
     params: &CollisionParams,
 ) -> Result<ResolveStats, Unresolved> {
     let fail = |cause| Err(Unresolved { cause });
@@ -112,7 +163,7 @@ pub fn resolve(
         let pairs = proximity_pairs(&detector, triangles, x0, h);
         stats.proximity_pairs = pairs.len();
         for c in &pairs {
-            repel(triangles, c, x0, x1, h);
+            repel(triangles, c, x0, x1, h, pins);
         }
     }
     // After the first full detection, each round re-tests only pairs touching a vertex that
@@ -141,7 +192,7 @@ pub fn resolve(
         stats.contacts += contacts.len();
         let before = x1.to_vec();
         for c in &contacts {
-            impulse(triangles, c, x0, x1, h);
+            impulse(triangles, c, x0, x1, h, pins);
         }
         changed = mark(&before, x1, &contacts);
     }
@@ -210,19 +261,21 @@ fn combine(w: &[f64; 4], ids: &[u32; 4], x: &[DVec3]) -> DVec3 {
 }
 
 /// Adds the impulse that raises the relative displacement along `n` by `delta`, shared by the
-/// four vertices in proportion to their weights (equal masses; Bridson et al. 2002 §7.1).
-fn apply(ids: &[u32; 4], w: &[f64; 4], n: DVec3, delta: f64, x1: &mut [DVec3]) {
-    let norm: f64 = w.iter().map(|w| w * w).sum();
+/// four vertices in proportion to their weights (equal masses; Bridson et al. 2002 §7.1);
+/// pinned coordinates take no share (their inverse mass is zero).
+fn apply(ids: &[u32; 4], w: &[f64; 4], n: DVec3, delta: f64, x1: &mut [DVec3], pins: Pins) {
+    let along = ids.map(|v| pins.free(v) * n);
+    let norm: f64 = (0..4).map(|i| w[i] * w[i] * along[i].dot(n)).sum();
     if norm <= 0.0 || delta <= 0.0 {
         return;
     }
     for i in 0..4 {
-        x1[ids[i] as usize] += (w[i] * delta / norm) * n;
+        x1[ids[i] as usize] += (w[i] * delta / norm) * along[i];
     }
 }
 
 /// Proximity repulsion for a pair closer than `h` at the start (module doc, step 1).
-fn repel(triangles: &[[u32; 3]], c: &Contact, x0: &[DVec3], x1: &mut [DVec3], h: f64) {
+fn repel(triangles: &[[u32; 3]], c: &Contact, x0: &[DVec3], x1: &mut [DVec3], h: f64, pins: Pins) {
     let ids = vertices_of(triangles, c);
     let p = ids.map(|i| x0[i as usize]);
     let w = match c {
@@ -243,12 +296,19 @@ fn repel(triangles: &[[u32; 3]], c: &Contact, x0: &[DVec3], x1: &mut [DVec3], h:
     let n = gap / d0;
     let dn = (combine(&w, &ids, x1) - gap).dot(n);
     let allowed = if d0 >= 0.5 * h { 0.5 * h - d0 } else { 0.0 };
-    apply(&ids, &w, n, allowed - dn, x1);
+    apply(&ids, &w, n, allowed - dn, x1, pins);
 }
 
 /// CCD impulse for one contact (module doc, step 2); skipped if earlier impulses of the same
 /// sweep already removed it.
-fn impulse(triangles: &[[u32; 3]], c: &Contact, x0: &[DVec3], x1: &mut [DVec3], h: f64) {
+fn impulse(
+    triangles: &[[u32; 3]],
+    c: &Contact,
+    x0: &[DVec3],
+    x1: &mut [DVec3],
+    h: f64,
+    pins: Pins,
+) {
     let ids = vertices_of(triangles, c);
     let (p0, p1) = (ids.map(|i| x0[i as usize]), ids.map(|i| x1[i as usize]));
     let hit: Option<Hit> = match c {
@@ -284,7 +344,7 @@ fn impulse(triangles: &[[u32; 3]], c: &Contact, x0: &[DVec3], x1: &mut [DVec3], 
     let (n, s0) = if s0 < 0.0 { (-n, -s0) } else { (n, s0) };
     let target = 0.5 * s0.min(h);
     let end = s0 + motion.dot(n);
-    apply(&ids, &w, n, target - end, x1);
+    apply(&ids, &w, n, target - end, x1, pins);
 }
 
 /// Union–find over vertices for impact zones (smaller root index wins: deterministic).
