@@ -3,10 +3,11 @@
 //!
 //! Interface cells are handled with the stencils (their boundary tet faces are split by
 //! label, sharing edge and triple-point vertices with the interior). Here: leaves with one
-//! phase. A leaf face with only its 4 corners on its perimeter becomes 2 triangles along the
-//! min→max diagonal; a coarse leaf face whose edges carry hanging nodes (corners of smaller
-//! neighbouring leaf faces) becomes a fan around a new centre vertex through every such node,
-//! so the closure is conforming (no T-junctions) with O(perimeter) triangles per leaf face.
+//! phase, boxes (in a slab, the coarse leaves are columns spanning its thickness). A leaf face
+//! with only its 4 corners on its perimeter becomes 2 triangles along the min→max diagonal; a
+//! coarse leaf face whose edges carry hanging nodes (corners of smaller neighbouring leaf
+//! faces) becomes a fan around a new centre vertex through every such node, so the closure is
+//! conforming (no T-junctions) with O(perimeter) triangles per leaf face.
 
 use glam::DVec3;
 use polyphase_grid::OUTSIDE;
@@ -47,7 +48,7 @@ impl MdTree {
                 let mut out = Vec::new();
                 for axis in 0..3 {
                     for side in 0..2u64 {
-                        let coord = cell.min[axis] + side * cell.size;
+                        let coord = cell.min[axis] + side * cell.edge[axis];
                         if coord != side * lat.dims[axis] {
                             continue;
                         }
@@ -57,7 +58,7 @@ impl MdTree {
                         p[axis] = coord;
                         // Walk the perimeter: +u, +v, −u, −v.
                         for (dir, sign) in [(u, 1i64), (v, 1), (u, -1), (v, -1)] {
-                            for step in 0..cell.size {
+                            for step in 0..cell.edge[dir] {
                                 if step == 0 || corners.binary_search(&lat.id(p)).is_ok() {
                                     ring.push(lat.id(p));
                                 }
@@ -95,10 +96,8 @@ impl MdTree {
     pub(crate) fn face_centre(&self, cell: u32, face: u8) -> DVec3 {
         let c = self.cells[cell as usize];
         let (axis, side) = ((face / 2) as usize, (face % 2) as u64);
-        let s = c.size as f64;
-        let mut p =
-            DVec3::new(c.min[0] as f64, c.min[1] as f64, c.min[2] as f64) + DVec3::splat(0.5 * s);
-        p[axis] = (c.min[axis] + side * c.size) as f64;
+        let mut p = DVec3::from_array([0, 1, 2].map(|a| c.min[a] as f64 + 0.5 * c.edge[a] as f64));
+        p[axis] = (c.min[axis] + side * c.edge[axis]) as f64;
         self.lattice.origin + p * self.lattice.h
     }
 }

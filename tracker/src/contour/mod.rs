@@ -10,9 +10,13 @@
 //! - `nodes`: φ, χ live in one open-addressing table keyed by the linear lattice node id
 //!   (every sampled point, centres included, is a lattice node); cells keep their corners'
 //!   slots, so only the build hashes.
-//! - `tree`: a forest of root blocks (largest power of two ≤ 16 dividing all dims), refined
-//!   level by level with the §6.2 rule; each level's new points are deduplicated, sorted and
-//!   evaluated in parallel. A conformity pass protects watertightness when φ over-estimates.
+//! - `tree`: a forest of root blocks (largest power of two ≤ 16 dividing all dims, or divided
+//!   by a thin one), refined level by level with the §6.2 rule; each level's new points are
+//!   deduplicated, sorted and evaluated in parallel. A conformity pass protects watertightness
+//!   when φ over-estimates. A cell spans an axis thinner than its size (a slab's two cells in
+//!   z) and splits in the other two only, so a slab's tree is a quadtree of columns down to
+//!   size 2 (issue 16: 2-cell root blocks had every node of a slab sampled). Near the
+//!   interface the cells are those of the cubic tree, so the contour is the same.
 //! - `stencils`: Kuhn 6-tet split of every cube; the Fig. 5 stencils, oriented from nominal
 //!   positions so the mesh is closed and label-consistent by construction.
 //! - `bisect`: edge crossings by safeguarded regula falsi on brackets tightened with φ; triple

@@ -6,7 +6,7 @@ use glam::DVec3;
 use thiserror::Error;
 
 use super::nodes::{Lattice, NodeMap};
-use super::tree::{Cell, MdTree, LEAF};
+use super::tree::{edges, Cell, MdTree, LEAF};
 
 /// Why bytes are not a tree image.
 #[derive(Debug, Error, PartialEq)]
@@ -94,6 +94,7 @@ impl MdTree {
             cells.push(Cell {
                 min,
                 size,
+                edge: edges(size, lattice.dims),
                 child,
                 chi,
                 mixed,
@@ -132,7 +133,8 @@ impl MdTree {
             return bad("block size or lattice".into());
         }
         for (i, c) in cells.iter().enumerate() {
-            let children_fit = c.child == LEAF || (c.child as usize) + 8 <= cells.len();
+            let children_fit =
+                c.child == LEAF || (c.child as usize) + c.child_count() as usize <= cells.len();
             let slots_fit = c.child != LEAF || c.slots.iter().all(|&s| (s as usize) < dist.len());
             if !children_fit || !slots_fit {
                 return bad(format!("cell {i} points outside the tree"));
@@ -233,6 +235,38 @@ mod tests {
         }
         // Both the tree's uniform leaves and its interface cells (None: "ask the mesh") were hit.
         assert!(answered.iter().all(|&n| n > 0), "{answered:?}");
+    }
+
+    #[test]
+    fn slab_image_round_trip_keeps_the_columns() {
+        // Cells spanning a slab's thickness get their edges back from the lattice.
+        let grid = GridSpec {
+            origin: DVec3::ZERO,
+            h: 1.0 / 64.0,
+            dims: [64, 32, 2],
+        };
+        let sampler = |x: DVec3| -> (f64, PhaseId) {
+            let d = (x - DVec3::new(0.5, 0.25, x.z)).length() - 0.15;
+            (d.abs(), PhaseId::from(d < 0.0))
+        };
+        let tree = MdTree::build(&grid, &sampler);
+        assert!(tree.cells.iter().any(|c| c.size > 2));
+        let back = MdTree::from_bytes(&tree.to_bytes()).unwrap();
+        assert_eq!(back.to_bytes(), tree.to_bytes());
+        assert!(back
+            .cells
+            .iter()
+            .zip(&tree.cells)
+            .all(|(a, b)| a.edge == b.edge));
+        for i in 0..1000 {
+            let f = |k: u64| ((i as u64 * k) % 1009) as f64 / 1009.0;
+            let x = DVec3::new(f(37), 0.5 * f(101), 2.0 * grid.h * f(367));
+            let (a, b) = (tree.sample(x), back.sample(x));
+            assert_eq!(
+                a.map(|(p, c)| (p.to_bits(), c)),
+                b.map(|(p, c)| (p.to_bits(), c))
+            );
+        }
     }
 
     #[test]

@@ -166,8 +166,9 @@ fn wedges_are_closed_with_right_volumes() {
 
 #[test]
 fn shapes_cut_by_the_box_close_on_any_grid() {
-    // Non-cubic dims (root blocks B = 4, and B = 2 for the slab), an offset origin, and the
-    // cut sphere crossing the box so that 2- and 3-label boundary faces occur.
+    // Non-cubic dims (root blocks B = 4; slabs with B = 2, and with B = 8 and cells of size
+    // 4 and 8 spanning the slab's thickness), an offset origin, and the cut sphere crossing
+    // the box so that 2- and 3-label boundary faces occur.
     let grids = [
         GridSpec {
             origin: DVec3::new(0.2, 0.1, 0.25),
@@ -178,6 +179,11 @@ fn shapes_cut_by_the_box_close_on_any_grid() {
             origin: DVec3::new(0.05, 0.0, 0.49),
             h: 0.03,
             dims: [26, 30, 2],
+        },
+        GridSpec {
+            origin: DVec3::new(0.05, 0.02, 0.49),
+            h: 0.03,
+            dims: [32, 24, 2],
         },
     ];
     for grid in grids {
@@ -557,5 +563,165 @@ fn triple_lines_do_not_fold() {
         let (grid, _, mesh) = build_and_contour(n, &f);
         assert_valid(&mesh, &grid);
         assert_eq!(folded_triple_lines(&mesh), 0, "{k} wedges at {n}³");
+    }
+}
+
+/// A slab of `n`×`n`×2 cells over the unit square, as slab scenes run.
+fn slab_grid(n: usize) -> GridSpec {
+    GridSpec {
+        origin: DVec3::ZERO,
+        h: 1.0 / n as f64,
+        dims: [n, n, 2],
+    }
+}
+
+/// The disc (C, R) in the xy plane, extruded along z (a slab scene's cylinder); `k` ≥ 2 cuts
+/// it into sectors (phases 1..=k) as [`wedges`] does, with φ the same lower bound.
+fn disc_sectors(k: usize) -> impl Fn(DVec3) -> (f64, PhaseId) + Sync {
+    move |x: DVec3| {
+        let p = DVec3::new(x.x - C.x, x.y - C.y, 0.0);
+        let d_disc = p.length() - R;
+        let mut phi = d_disc.abs();
+        if k >= 2 {
+            for i in 0..k {
+                let a = i as f64 * 2.0 * PI / k as f64;
+                phi = phi.min((p.y * a.cos() - p.x * a.sin()).abs());
+            }
+        }
+        let theta = p.y.atan2(p.x).rem_euclid(2.0 * PI);
+        let sector = ((theta / (2.0 * PI / k as f64)) as usize).min(k - 1);
+        let chi = if d_disc < 0.0 {
+            sector as PhaseId + 1
+        } else {
+            0
+        };
+        (phi, chi)
+    }
+}
+
+#[test]
+fn slab_tree_is_a_quadtree_of_columns() {
+    // Issue 16: a slab two cells thick used to be tiled by 2-cell root blocks (a 256² slab:
+    // 16 384 of them, every one sampled); now its cells of size ≥ 2 span the thickness and
+    // coarsen in the plane up to 16-cell blocks, and only unit cells split along z.
+    let n = 64;
+    let grid = slab_grid(n);
+    let f = disc_sectors(3);
+    let tree = MdTree::build(&grid, &f);
+    assert_eq!(tree.block, 16);
+    assert_eq!(tree.roots, [4, 4, 1]);
+    for c in &tree.cells {
+        assert_eq!(c.edge, [c.size, c.size, c.size.min(2)], "{c:?}");
+        if c.child != LEAF {
+            assert_eq!(c.child_count(), if c.size > 2 { 4 } else { 8 }, "{c:?}");
+        }
+    }
+    // The interface cells are exactly the unit cells whose corners' phases differ.
+    let lat = tree.lattice;
+    let mut brute = Vec::new();
+    for k in 0..2u64 {
+        for j in 0..n as u64 {
+            for i in 0..n as u64 {
+                let corner = |c: u64| lat.pos_ijk([i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2)]);
+                let chi: Vec<PhaseId> = (0..8).map(|c| f(corner(c)).1).collect();
+                if chi.iter().any(|&c| c != chi[0]) {
+                    brute.push(lat.id([i, j, k]));
+                }
+            }
+        }
+    }
+    brute.sort_unstable();
+    let mine: Vec<u64> = tree
+        .interface
+        .iter()
+        .map(|&c| lat.id(tree.cells[c as usize].min))
+        .collect();
+    assert_eq!(mine, brute);
+    // Closed, filling the slab, each sector within the chord bound of its arc (edges ≤ √3·h:
+    // area gap ≤ π·h²/2 for the whole circle, times the thickness).
+    let mesh = tree.contour(&f);
+    assert_valid(&mesh, &grid);
+    let vols = mesh.phase_volumes(4);
+    let thickness = 2.0 * grid.h;
+    let total: f64 = vols.iter().sum();
+    assert!((total - thickness).abs() < 1e-12, "{total} ({vols:?})");
+    let exact = PI * R * R * thickness / 3.0;
+    for v in &vols[1..] {
+        let bound = 0.5 * PI * grid.h * grid.h * thickness;
+        assert!((v - exact).abs() < bound, "{v} vs {exact} ({vols:?})");
+    }
+}
+
+#[test]
+fn slab_work_scales_with_the_interface() {
+    // Quadtree work per interface cell: doubling the resolution doubles the interface and
+    // the sampled nodes with it (the old 2-cell blocks quadrupled them: every block's corners
+    // were sampled).
+    let f = disc_sectors(1);
+    let counts: Vec<(usize, usize)> = [128, 256]
+        .iter()
+        .map(|&n| {
+            let t = MdTree::build(&slab_grid(n), &f);
+            (t.node_count(), t.interface_cell_count())
+        })
+        .collect();
+    let nodes = counts[1].0 as f64 / counts[0].0 as f64;
+    let interface = counts[1].1 as f64 / counts[0].1 as f64;
+    assert!((1.8..2.2).contains(&interface), "{counts:?}");
+    assert!((1.6..2.6).contains(&nodes), "{counts:?}");
+    // Far below the 257² · 2 corners the 2-cell blocks sampled at 256².
+    assert!(counts[1].0 < 257 * 257 * 2 / 4, "{counts:?}");
+}
+
+#[test]
+fn slab_sample_reads_phase_and_distance_from_the_tree() {
+    let grid = slab_grid(64);
+    let f = disc_sectors(1);
+    let tree = MdTree::build(&grid, &f);
+    let mut answered = [0; 2];
+    for i in 0..40 {
+        for j in 0..40 {
+            let z = (0.3 + 1.4 * ((i + j) % 2) as f64) * grid.h;
+            let x = DVec3::new(0.013 + i as f64 * 0.0247, 0.021 + j as f64 * 0.0243, z);
+            match tree.sample(x) {
+                Some((phi, chi)) => {
+                    assert_eq!(chi, f(x).1, "at {x}");
+                    // Bilinear in the plane on the exact distance to a circle (linear along
+                    // z, where it is constant), as in the sphere's test.
+                    assert!(
+                        (phi - f(x).0).abs() < 0.07 * (f(x).0 + grid.h),
+                        "at {x}: {phi} vs {}",
+                        f(x).0
+                    );
+                    answered[1] += 1;
+                }
+                None => answered[0] += 1,
+            }
+        }
+    }
+    assert!(answered.iter().all(|&n| n > 0), "{answered:?}");
+}
+
+#[test]
+fn root_blocks_tile_thin_axes() {
+    // (dims, B, roots): a thin axis is a power of two below B, spanned by one root; an axis
+    // that is neither a multiple of B nor such a power lowers B, as it always did.
+    let cases = [
+        ([1024, 1024, 2], 16, [64, 64, 1]),
+        ([256, 128, 2], 16, [16, 8, 1]),
+        ([64, 32, 8], 16, [4, 2, 1]),
+        ([26, 30, 2], 2, [13, 15, 1]),
+        ([20, 16, 12], 4, [5, 4, 3]),
+        ([2, 2, 2], 2, [1, 1, 1]),
+        ([1, 8, 8], 1, [1, 8, 8]),
+    ];
+    for (dims, block, roots) in cases {
+        let grid = GridSpec {
+            origin: DVec3::ZERO,
+            h: 0.01,
+            dims,
+        };
+        let tree = MdTree::build(&grid, &|_: DVec3| (1.0, 0));
+        assert_eq!((tree.block, tree.roots), (block, roots), "{dims:?}");
     }
 }

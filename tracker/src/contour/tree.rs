@@ -17,12 +17,18 @@ const MAX_BLOCK: u64 = 16;
 /// Split factor of §6.2: split a cell of edge `h_c` when φ(centre) < `SPLIT_FACTOR`·h_c.
 const SPLIT_FACTOR: f64 = 3.0;
 
-/// One cell of the forest: a cube of `size` unit cells with lower corner `min` (in cells).
+/// One cell of the forest: a box of `edge` unit cells with lower corner `min` (in cells).
+/// It is a cube of edge `size` except along a thin axis of the grid (a slab's z), where it
+/// spans the whole grid (see [`edges`]).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Cell {
     pub min: [u64; 3],
+    /// The cell's level: its edge along every axis the grid is not thinner than.
     pub size: u64,
-    /// Index of the first of 8 children (octant order x + 2y + 4z), or [`LEAF`].
+    /// The edge along each axis, `min(size, dims[a])`.
+    pub edge: [u64; 3],
+    /// Index of the first of the children (octant order x + 2y + 4z, the octants of the axes
+    /// it splits along only; see [`Cell::split_mask`]), or [`LEAF`].
     pub child: u32,
     /// The corners' phase when they all agree.
     pub chi: PhaseId,
@@ -36,20 +42,66 @@ impl Cell {
     /// Lattice coordinates of corner `c` (bits x + 2y + 4z) of this cell.
     #[inline]
     pub fn corner(&self, c: usize) -> [u64; 3] {
-        let s = self.size;
+        let e = self.edge;
         [
-            self.min[0] + s * (c as u64 & 1),
-            self.min[1] + s * ((c as u64 >> 1) & 1),
-            self.min[2] + s * ((c as u64 >> 2) & 1),
+            self.min[0] + e[0] * (c as u64 & 1),
+            self.min[1] + e[1] * ((c as u64 >> 1) & 1),
+            self.min[2] + e[2] * ((c as u64 >> 2) & 1),
         ]
     }
+
+    /// Lattice coordinates of the centre (a lattice node for size ≥ 2: every edge is then
+    /// even, see [`block_size`]).
+    #[inline]
+    pub fn centre(&self) -> [u64; 3] {
+        [0, 1, 2].map(|a| self.min[a] + self.edge[a] / 2)
+    }
+
+    /// Bits (x + 2y + 4z) of the axes a split halves: those the cell is as long as its size
+    /// along. A cell spanning a thin axis keeps spanning it, so a slab's tree is a quadtree
+    /// of columns down to size 2, and an octree below.
+    #[inline]
+    pub fn split_mask(&self) -> u32 {
+        (0..3)
+            .filter(|&a| self.edge[a] == self.size)
+            .fold(0, |m, a| m | 1 << a)
+    }
+
+    /// How many children a split gives: 2 per halved axis.
+    #[inline]
+    pub fn child_count(&self) -> u32 {
+        1 << self.split_mask().count_ones()
+    }
+}
+
+/// A cell's edges per axis at level `size` in a grid of `dims` cells: `size`, except along
+/// an axis thinner than that, which the cell spans.
+pub(crate) fn edges(size: u64, dims: [u64; 3]) -> [u64; 3] {
+    dims.map(|d| size.min(d))
+}
+
+/// The index among a cell's children of the child in octant `k` (bits x + 2y + 4z, zero on
+/// the axes outside `mask`): `k`'s bits on the axes of `mask`, packed in axis order, so the
+/// children keep octant order.
+#[inline]
+fn child_rank(k: u32, mask: u32) -> u32 {
+    let (mut rank, mut bit) = (0, 0);
+    for a in 0..3 {
+        if mask >> a & 1 == 1 {
+            rank |= (k >> a & 1) << bit;
+            bit += 1;
+        }
+    }
+    rank
 }
 
 /// Adaptive multiphase distance tree of paper 004 §6: φ and χ sampled at cell corners (and
 /// centres of cells of size ≥ 2), refined to unit cells wherever the interface may pass.
 ///
-/// The forest's roots are blocks of edge B = the largest power of two ≤ 16 dividing every
-/// `dims[a]`, so any grid (even a 256×256×2 slab, B = 2) is tiled exactly.
+/// The forest's roots are blocks of edge B, the largest power of two ≤ 16 that divides every
+/// `dims[a]` or is divided by it, so any grid is tiled exactly. An axis thinner than B (a
+/// slab's two cells in z: a 256×256×2 slab has B = 16) is spanned whole by every cell of
+/// size ≥ its thickness: the tree coarsens in the slab's plane as a 2D quadtree would.
 #[derive(Clone, Debug)]
 pub struct MdTree {
     pub(crate) lattice: Lattice,
@@ -64,10 +116,13 @@ pub struct MdTree {
     pub(crate) interface: Vec<u32>,
 }
 
-/// Largest power of two ≤ 16 dividing all of `dims` (all positive).
+/// Largest power of two b ≤ 16 such that each of `dims` (all positive) is a multiple of b,
+/// or a power of two ≥ 2 below b (a thin axis: the cells span it, and their centres stay
+/// lattice nodes), and at least one is a multiple (so every split halves some axis).
 fn block_size(dims: [u64; 3]) -> u64 {
     let mut b = MAX_BLOCK;
-    while b > 1 && dims.iter().any(|d| d % b != 0) {
+    let tiles = |d: u64, b: u64| d.is_multiple_of(b) || (2..b).contains(&d) && b.is_multiple_of(d);
+    while b > 1 && !(dims.iter().all(|&d| tiles(d, b)) && dims.iter().any(|&d| d >= b)) {
         b /= 2;
     }
     b
@@ -94,13 +149,14 @@ impl MdTree {
         }
         let b = block_size(lattice.dims);
         tree.block = b;
-        tree.roots = lattice.dims.map(|d| d / b);
+        tree.roots = lattice.dims.map(|d| d.div_ceil(b));
         for k in 0..tree.roots[2] {
             for j in 0..tree.roots[1] {
                 for i in 0..tree.roots[0] {
                     tree.cells.push(Cell {
                         min: [i * b, j * b, k * b],
                         size: b,
+                        edge: edges(b, lattice.dims),
                         child: LEAF,
                         chi: 0,
                         mixed: false,
@@ -132,8 +188,7 @@ impl MdTree {
             .par_iter()
             .flat_map_iter(|&c| {
                 let cell = cells[c as usize];
-                let half = cell.size / 2;
-                let centre = (cell.size >= 2).then(|| lat.id(cell.min.map(|m| m + half)));
+                let centre = (cell.size >= 2).then(|| lat.id(cell.centre()));
                 (0..8).map(move |k| lat.id(cell.corner(k))).chain(centre)
             })
             .collect();
@@ -159,27 +214,26 @@ impl MdTree {
         }
     }
 
-    /// Give leaf `c` its 8 children (octant order); returns their indices.
+    /// Give leaf `c` its children (8, or 4 in a slab's plane; octant order); returns their
+    /// indices.
     fn split(&mut self, c: u32) -> std::ops::Range<u32> {
         let first = self.cells.len() as u32;
         let parent = self.cells[c as usize];
         self.cells[c as usize].child = first;
         let half = parent.size / 2;
-        for k in 0..8u64 {
+        let mask = parent.split_mask();
+        for k in (0..8u32).filter(|k| k & !mask == 0) {
             self.cells.push(Cell {
-                min: [
-                    parent.min[0] + half * (k & 1),
-                    parent.min[1] + half * ((k >> 1) & 1),
-                    parent.min[2] + half * ((k >> 2) & 1),
-                ],
+                min: [0, 1, 2].map(|a| parent.min[a] + half * u64::from(k >> a & 1)),
                 size: half,
+                edge: edges(half, self.lattice.dims),
                 child: LEAF,
                 chi: 0,
                 mixed: false,
                 slots: [0; 8],
             });
         }
-        first..first + 8
+        first..first + parent.child_count()
     }
 
     /// Safety net for samplers whose φ over-estimates the distance (a semi-Lagrangian φ is
@@ -260,7 +314,7 @@ impl MdTree {
                 let mixed = slots.iter().any(|&s| nodes.chi[s as usize] != chi0);
                 let split = cell.size >= 2
                     && (mixed || {
-                        let centre = lat.id(cell.min.map(|m| m + cell.size / 2));
+                        let centre = lat.id(cell.centre());
                         let phi = nodes.value(centre).map_or(0.0, |v| v.0);
                         phi < SPLIT_FACTOR * h * cell.size as f64
                     });
@@ -310,10 +364,11 @@ impl MdTree {
                 return Some(c);
             }
             let half = (cell.size / 2) as f64;
+            let mask = cell.split_mask();
             let oct = (0..3).fold(0u32, |o, a| {
                 o | (((u[a] >= cell.min[a] as f64 + half) as u32) << a)
             });
-            c = cell.child + oct;
+            c = cell.child + child_rank(oct & mask, mask);
         }
     }
 
@@ -329,8 +384,9 @@ impl MdTree {
         if cell.mixed {
             return None;
         }
-        let s = cell.size as f64;
-        let t = (u - DVec3::new(cell.min[0] as f64, cell.min[1] as f64, cell.min[2] as f64)) / s;
+        let [ex, ey, ez] = cell.edge.map(|e| e as f64);
+        let t = (u - DVec3::new(cell.min[0] as f64, cell.min[1] as f64, cell.min[2] as f64))
+            / DVec3::new(ex, ey, ez);
         let mut phi = 0.0;
         for k in 0..8 {
             let w = (0..3).fold(1.0, |w, a| {
