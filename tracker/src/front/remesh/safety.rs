@@ -68,15 +68,22 @@ impl Remesher<'_> {
                     (lo.min(p).min(q), hi.max(p).max(q))
                 })
         };
+        // Each candidate's corners and swept box, once for all moving triangles.
+        let candidates: Vec<(u32, [u32; 3], (DVec3, DVec3))> = near
+            .iter()
+            .filter(|&&s| self.c.is_live(s))
+            .map(|&s| {
+                let sv = self.c.triangle(s);
+                (s, sv, swept(sv))
+            })
+            .collect();
         for &t in &tris {
             let tv = self.c.triangle(t);
             let (tlo, thi) = swept(tv);
-            for &s in &near {
-                if s == t || !self.c.is_live(s) {
+            for &(s, sv, (slo, shi)) in &candidates {
+                if s == t {
                     continue;
                 }
-                let sv = self.c.triangle(s);
-                let (slo, shi) = swept(sv);
                 if tlo.cmpgt(shi).any() || slo.cmpgt(thi).any() {
                     continue;
                 }

@@ -193,3 +193,32 @@ fn refining_a_sphere_moves_new_vertices_toward_it() {
         "recovered {recovered:.3}, {stats:?}"
     );
 }
+
+/// Two boundary faces meeting at a right angle along a box edge: sliding a vertex within its
+/// wall keeps the domain's volume, flipping the shared edge cuts the corner off it.
+#[test]
+fn only_moves_within_the_walls_keep_the_domain() {
+    use super::{moves_the_domain_boundary, Tri};
+    use polyphase_grid::OUTSIDE;
+    let (a, b) = (DVec3::new(0.0, 0.0, 0.0), DVec3::new(0.0, 0.0, 1.0));
+    // Wall x = 0 holds c, wall y = 0 holds d.
+    let (c, d) = (DVec3::new(0.0, 1.0, 0.5), DVec3::new(1.0, 0.0, 0.5));
+    let tri = |p: [DVec3; 3]| Tri {
+        p,
+        labels: [0, OUTSIDE],
+    };
+    let old = [tri([a, b, c]), tri([b, a, d])];
+    let slid = [
+        tri([a, b, c + DVec3::new(0.0, 0.2, 0.1)]),
+        tri([b, a, d + DVec3::new(-0.3, 0.0, 0.0)]),
+    ];
+    assert!(!moves_the_domain_boundary(&old, &slid));
+    let flipped = [tri([c, d, a]), tri([d, c, b])];
+    assert!(moves_the_domain_boundary(&old, &flipped));
+    // An interface triangle alone never moves the domain.
+    let film = |p: [DVec3; 3]| Tri { p, labels: [0, 1] };
+    assert!(!moves_the_domain_boundary(
+        &[film([a, b, c])],
+        &[film([a, b, d])]
+    ));
+}

@@ -149,3 +149,32 @@ fn proximity_repulsion_stops_approach_inside_the_thickness() {
     assert!((before - 0.002).abs() < 1e-9, "{before}");
     assert!(after > 0.0018, "{after}");
 }
+
+#[test]
+fn pinned_coordinates_take_no_share_of_an_impulse() {
+    let m = two_spheres(0.02, 2);
+    let x0 = m.vertices.clone();
+    // The right sphere's x coordinates are held (as a vertex sliding on a wall x = const).
+    let pinned: Vec<[bool; 3]> = x0.iter().map(|p| [p.x > 0.0, false, false]).collect();
+    let mut x1 = driven(&m, 0.1, 0.0, 1);
+    let proposed = x1.clone();
+    let stats = resolve_pinned(
+        &m.triangles,
+        &x0,
+        &mut x1,
+        &pinned,
+        &CollisionParams::default(),
+    )
+    .expect("resolved");
+    assert!(stats.contacts > 0);
+    assert_clean(&m, &x0, &x1);
+    for (v, p) in pinned.iter().enumerate() {
+        if p[0] {
+            assert_eq!(x1[v].x, proposed[v].x, "vertex {v}");
+        }
+    }
+    // Unpinned, the same motion moves the right sphere's x too.
+    let mut free = proposed.clone();
+    resolve(&m.triangles, &x0, &mut free, &CollisionParams::default()).expect("resolved");
+    assert!((0..free.len()).any(|v| pinned[v][0] && free[v].x != proposed[v].x));
+}
