@@ -267,19 +267,20 @@ fn quadrants_filling_the_domain_close_at_the_boundary() {
     }
 }
 
-#[test]
-fn interface_cells_match_brute_force() {
-    let grid = unit_grid(16);
-    let f = wedges(3);
-    let tree = MdTree::build(&grid, &f);
+/// The tree's interface cells are exactly the unit cells of the `dims` lattice whose eight
+/// corners do not all have the same phase under `f`.
+fn assert_interface_is_brute_force(
+    tree: &MdTree,
+    f: &impl Fn(DVec3) -> (f64, PhaseId),
+    dims: [u64; 3],
+) {
     let lat = tree.lattice;
     let mut brute = Vec::new();
-    for k in 0..16u64 {
-        for j in 0..16u64 {
-            for i in 0..16u64 {
-                let chi: Vec<PhaseId> = (0..8u64)
-                    .map(|c| f(lat.pos_ijk([i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2)])).1)
-                    .collect();
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                let corner = |c: u64| lat.pos_ijk([i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2)]);
+                let chi: Vec<PhaseId> = (0..8).map(|c| f(corner(c)).1).collect();
                 if chi.iter().any(|&c| c != chi[0]) {
                     brute.push(lat.id([i, j, k]));
                 }
@@ -293,6 +294,14 @@ fn interface_cells_match_brute_force() {
         .map(|&c| lat.id(tree.cells[c as usize].min))
         .collect();
     assert_eq!(mine, brute);
+}
+
+#[test]
+fn interface_cells_match_brute_force() {
+    let grid = unit_grid(16);
+    let f = wedges(3);
+    let tree = MdTree::build(&grid, &f);
+    assert_interface_is_brute_force(&tree, &f, [16, 16, 16]);
     // Every interface cell is a unit leaf.
     assert!(tree
         .interface
@@ -616,27 +625,7 @@ fn slab_tree_is_a_quadtree_of_columns() {
             assert_eq!(c.child_count(), if c.size > 2 { 4 } else { 8 }, "{c:?}");
         }
     }
-    // The interface cells are exactly the unit cells whose corners' phases differ.
-    let lat = tree.lattice;
-    let mut brute = Vec::new();
-    for k in 0..2u64 {
-        for j in 0..n as u64 {
-            for i in 0..n as u64 {
-                let corner = |c: u64| lat.pos_ijk([i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2)]);
-                let chi: Vec<PhaseId> = (0..8).map(|c| f(corner(c)).1).collect();
-                if chi.iter().any(|&c| c != chi[0]) {
-                    brute.push(lat.id([i, j, k]));
-                }
-            }
-        }
-    }
-    brute.sort_unstable();
-    let mine: Vec<u64> = tree
-        .interface
-        .iter()
-        .map(|&c| lat.id(tree.cells[c as usize].min))
-        .collect();
-    assert_eq!(mine, brute);
+    assert_interface_is_brute_force(&tree, &f, [n as u64, n as u64, 2]);
     // Closed, filling the slab, each sector within the chord bound of its arc (edges ≤ √3·h:
     // area gap ≤ π·h²/2 for the whole circle, times the thickness).
     let mesh = tree.contour(&f);
