@@ -106,7 +106,7 @@ pub fn resolve_pinned(
     pinned: &[[bool; 3]],
     params: &CollisionParams,
 ) -> Result<ResolveStats, Unresolved> {
-    let proposed: Vec<DVec3> = pinned.iter().zip(x1.iter()).map(|(_, &p)| p).collect();
+    let proposed = x1[..pinned.len().min(x1.len())].to_vec();
     let stats = resolve_with(triangles, x0, x1, Pins(pinned), params)?;
     if let Some(vertex) =
         (0..proposed.len()).find(|&v| (0..3).any(|k| pinned[v][k] && x1[v][k] != proposed[v][k]))
