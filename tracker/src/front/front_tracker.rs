@@ -263,11 +263,12 @@ impl FrontTracker {
         x0: &[DVec3],
         t: f64,
         dt: f64,
+        pinned: &[[bool; 3]],
     ) -> Result<Vec<DVec3>, TrackerError> {
         let velocity = match motion {
             Motion::Vertices(v) => {
                 let x1 = x0.iter().zip(v).map(|(&x, &v)| x + dt * v).collect();
-                return self.finite(x0, x1, t, false);
+                return self.finite(x0, x1, t, pinned);
             }
             Motion::Field(velocity) => velocity,
         };
@@ -288,18 +289,17 @@ impl FrontTracker {
                 }
             })
             .collect();
-        self.finite(x0, x1, t, motion.slides_walls())
+        self.finite(x0, x1, t, pinned)
     }
 
-    /// `x1`, constrained to the domain (wall vertices sliding when `slide`, see
-    /// [`Motion::slides_walls`]), or the error naming the first vertex whose motion is not
-    /// finite.
+    /// `x1`, constrained to the domain with `pinned` ([`Self::constrain`]), or the error
+    /// naming the first vertex whose motion is not finite.
     fn finite(
         &self,
         x0: &[DVec3],
         x1: Vec<DVec3>,
         t: f64,
-        slide: bool,
+        pinned: &[[bool; 3]],
     ) -> Result<Vec<DVec3>, TrackerError> {
         if let Some(i) = x1.iter().position(|p| !p.is_finite()) {
             let x = x0[i];
@@ -310,16 +310,18 @@ impl FrontTracker {
                 t,
             });
         }
-        Ok(self.constrain(x0, x1, slide))
+        Ok(self.constrain(x0, x1, pinned))
     }
 
-    /// Per vertex, the coordinates [`Self::constrain`] holds: those of the box planes it lies
-    /// on, and all three for a vertex only on domain boundary faces unless `slide`.
+    /// Per vertex, the coordinates the domain walls hold: those of the box planes it lies on,
+    /// and all three for a vertex only on domain boundary faces unless `slide`
+    /// ([`Motion::slides_walls`]).
     fn fixed_coordinates(&self, slide: bool) -> Vec<[bool; 3]> {
         let n = self.c.mesh.vertices.len();
         let Some((lo, hi)) = self.domain else {
             return vec![[false; 3]; n];
         };
+        // Coordinates within a billionth of the box size of a box plane lie on it.
         let tol = 1e-9 * (hi - lo).max_element();
         (0..n as u32)
             .map(|v| {
@@ -336,25 +338,18 @@ impl FrontTracker {
             .collect()
     }
 
-    /// Keeps the domain boundary in place: vertices slide within the boundary planes they lie
-    /// on, and vertices only on boundary faces stay unless `slide`.
-    fn constrain(&self, x0: &[DVec3], mut x1: Vec<DVec3>, slide: bool) -> Vec<DVec3> {
+    /// Keeps the domain boundary in place: each boundary vertex keeps its `pinned`
+    /// coordinates ([`Self::fixed_coordinates`]) and stays inside the box.
+    fn constrain(&self, x0: &[DVec3], mut x1: Vec<DVec3>, pinned: &[[bool; 3]]) -> Vec<DVec3> {
         let Some((lo, hi)) = self.domain else {
             return x1;
         };
-        // Coordinates within a billionth of the box size of a box plane lie on it.
-        let tol = 1e-9 * (hi - lo).max_element();
         for (v, p) in x1.iter_mut().enumerate() {
             if !self.c.on_boundary(v as u32) {
                 continue;
             }
-            let tris = self.c.vertex_triangles(v as u32);
-            if !slide && tris.iter().all(|&t| self.c.labels(t).contains(&OUTSIDE)) {
-                *p = x0[v];
-                continue;
-            }
             for k in 0..3 {
-                if (x0[v][k] - lo[k]).abs() <= tol || (x0[v][k] - hi[k]).abs() <= tol {
+                if pinned[v][k] {
                     p[k] = x0[v][k];
                 }
             }
@@ -375,10 +370,10 @@ impl FrontTracker {
     ) -> Result<(), TrackerError> {
         let start = Instant::now();
         let x0 = self.c.mesh.vertices.clone();
-        let mut x1 = self.integrate(motion, &x0, t, dt)?;
+        let pinned = self.fixed_coordinates(motion.slides_walls());
+        let mut x1 = self.integrate(motion, &x0, t, dt, &pinned)?;
         self.report.substeps += 1;
         let integrated = Instant::now();
-        let pinned = self.fixed_coordinates(motion.slides_walls());
         let resolved = resolve_pinned(
             &self.c.mesh.triangles,
             &x0,
