@@ -36,7 +36,9 @@ def _rank(phase, scene, opaque):
 
 def split_pairs(mesh: LabeledMesh, scene, tank: bool, smooth: bool) -> list:
     """One `PairShape` per (interior, exterior, kind), in sorted order. Background faces on the
-    domain boundary are kept only as tank walls (`tank`)."""
+    domain boundary are kept as tank walls (`tank`), or as closing faces where the background is
+    opaque (a foam's outer cell), and dropped otherwise. With a cut-away, triangles whose
+    centroid lies beyond its plane are left out."""
     n_phases = len(scene.phases)
     opaque = scene.opaque_ids()
     front, back = mesh.front, mesh.back
@@ -44,6 +46,10 @@ def split_pairs(mesh: LabeledMesh, scene, tank: bool, smooth: bool) -> list:
     valid &= (back < n_phases) | (back == OUTSIDE)
     valid &= ~((front == OUTSIDE) & (back == OUTSIDE))
     valid &= np.linalg.norm(face_normals(mesh.vertices, mesh.faces), axis=1) > 0
+    if scene.hints.cutaway is not None:
+        point, normal = scene.hints.cutaway
+        centroids = mesh.vertices[mesh.faces].mean(axis=1)
+        valid &= (centroids - point) @ normal <= 0
     idx = np.nonzero(valid)[0]
     f, b = front[idx], back[idx]
     interior = np.empty_like(f)
@@ -61,7 +67,7 @@ def split_pairs(mesh: LabeledMesh, scene, tank: bool, smooth: bool) -> list:
     shapes = []
     for key in sorted(set(zip(interior.tolist(), exterior.tolist()))):
         inner, outer = key
-        if outer == OUTSIDE and inner == scene.background:
+        if outer == OUTSIDE and inner == scene.background and inner not in opaque:
             if not tank:
                 continue
             kind = WALL

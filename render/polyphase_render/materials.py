@@ -2,7 +2,7 @@
 phases with their indices of refraction (a `null` BSDF where they are equal, so the boundary
 only switches media), a homogeneous purely absorbing medium per liquid whose transmittance over
 the scene's absorption length equals the phase colour (Beer–Lambert), and a rough plastic for
-phases the scene marks opaque."""
+phases the scene marks opaque (two-sided under a cut-away)."""
 
 import math
 
@@ -51,7 +51,7 @@ def bsdf_dict(shape, scene) -> dict:
     inner = scene.phases[shape.interior]
     outer_ior = ior_of(shape.exterior, scene)
     if shape.interior in scene.opaque_ids():
-        return {
+        plastic = {
             "type": "roughplastic",
             "distribution": "ggx",
             "alpha": 0.15,
@@ -59,6 +59,10 @@ def bsdf_dict(shape, scene) -> dict:
             "int_ior": 1.49,
             "ext_ior": outer_ior,
         }
+        # A cut-away opens shells toward the camera: their inner sides must show too.
+        if scene.hints.cutaway is not None:
+            return {"type": "twosided", "material": plastic}
+        return plastic
     if abs(inner.ior - outer_ior) < 1e-9:
         return {"type": "null"}
     return {"type": "dielectric", "int_ior": inner.ior, "ext_ior": outer_ior}

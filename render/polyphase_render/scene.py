@@ -10,6 +10,10 @@ from typing import Optional
 import numpy as np
 
 
+#: The `render.opaque` entry that names every phase.
+ALL_PHASES = "*"
+
+
 class SceneError(Exception):
     """`scene.toml` is missing or lacks what rendering needs."""
 
@@ -32,7 +36,7 @@ class RenderHints:
     camera_target: Optional[np.ndarray] = None  # point looked at (default: domain centre)
     up: Optional[np.ndarray] = None  # default: -gravity if the scene has one, else +y
     fov: float = 35.0  # horizontal field of view, degrees
-    opaque: Optional[list] = None  # phase names drawn as rough plastic (default: none; slabs: all)
+    opaque: Optional[list] = None  # phase names drawn as rough plastic, "*" all (default: none; slabs: all)
     tank: bool = False  # draw the domain walls as thin glass
     ground: bool = True  # checkered ground plane under the domain
     absorption_length: Optional[float] = None  # metres over which a liquid transmits its colour
@@ -40,6 +44,7 @@ class RenderHints:
     light: float = 1.0  # radiance of the rectangular area light above the domain
     smooth: bool = True  # interpolated vertex normals (crease angle 60 degrees)
     fps: int = 24  # movie frame rate
+    cutaway: Optional[tuple] = None  # (point, unit normal): triangles beyond the plane are not drawn
 
 
 @dataclass
@@ -72,9 +77,13 @@ class Scene:
         raise SceneError(f"no phase named {name!r}")
 
     def opaque_ids(self) -> set:
-        """Phases drawn as opaque plastic: the hint's list, or for a 2D slab every phase but the
-        background (a slab two cells thick shows no colour as a transparent liquid)."""
+        """Phases drawn as opaque plastic: the hint's list (`"*"` names every phase, the
+        background included: a foam's cells, whose names a generator chose), or for a 2D slab
+        every phase but the background (a slab two cells thick shows no colour as a transparent
+        liquid)."""
         if self.hints.opaque is not None:
+            if ALL_PHASES in self.hints.opaque:
+                return set(range(len(self.phases)))
             return {self.phase_index(n) for n in self.hints.opaque}
         if self.slab:
             return {i for i in range(len(self.phases)) if i != self.background}
@@ -136,6 +145,16 @@ def _hints(doc) -> RenderHints:
         if not (isinstance(t["opaque"], list) and all(isinstance(n, str) for n in t["opaque"])):
             raise SceneError("render.opaque must be a list of phase names")
         h.opaque = list(t["opaque"])
+    if "cutaway" in t:
+        c = t["cutaway"]
+        if not isinstance(c, dict) or set(c) != {"point", "normal"}:
+            raise SceneError("render.cutaway must be a table with point and normal")
+        point = _vec3(c, "point", "render.cutaway")
+        normal = _vec3(c, "normal", "render.cutaway")
+        length = float(np.linalg.norm(normal))
+        if length == 0:
+            raise SceneError("render.cutaway.normal must not be zero")
+        h.cutaway = (point, normal / length)
     if h.fov <= 0 or h.fov >= 180:
         raise SceneError("render.fov must be between 0 and 180 degrees")
     return h

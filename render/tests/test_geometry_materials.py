@@ -10,6 +10,7 @@ from polyphase_render.geometry import (
     INTERFACE,
     WALL,
     corner_normals,
+    face_normals,
     phase_volumes,
     split_pairs,
 )
@@ -66,6 +67,48 @@ class SplitTest(unittest.TestCase):
         red = [s for s in tank if s.kind == INTERFACE][0]
         total = signed_volume(closing.vertices, closing.faces) + signed_volume(red.vertices, red.faces)
         self.assertAlmostEqual(total, 0.5, places=12)
+
+    def test_an_opaque_background_is_closed_on_the_domain_boundary(self):
+        # A foam: every phase opaque ("*"), the background a cell like the others. Its faces on
+        # the domain boundary must be drawn, or the picture has a hole where it touches a wall.
+        labels = np.zeros((4, 4, 4), dtype=np.int64)
+        labels[:2] = 1
+        labels[:2, :2] = 2
+        mesh = voxel_mesh(labels, [0, 0, 0], [1, 1, 1])
+        foam = scene('\n[render]\nopaque = ["*"]\n')
+        self.assertEqual(foam.opaque_ids(), {0, 1, 2})
+        shapes = split_pairs(mesh, foam, False, False)
+        self.assertEqual(
+            {(s.interior, s.exterior, s.kind) for s in shapes},
+            {(0, OUTSIDE, CLOSING), (1, OUTSIDE, CLOSING), (2, OUTSIDE, CLOSING), (1, 0, INTERFACE),
+             (2, 0, INTERFACE), (2, 1, INTERFACE)},
+        )
+        # The closing faces cover the whole boundary of the unit box: 6 faces of area 1, each
+        # voxel face two triangles, every one drawn once.
+        closing = [s for s in shapes if s.kind == CLOSING]
+        area = sum(0.5 * np.linalg.norm(face_normals(s.vertices, s.faces), axis=1).sum() for s in closing)
+        self.assertAlmostEqual(area, 6.0, places=12)
+        self.assertEqual({bsdf_dict(s, foam)["type"] for s in shapes}, {"roughplastic"})
+        # A transparent background is still left open (its boundary is the tank's, if any).
+        self.assertNotIn(0, {s.interior for s in split_pairs(mesh, self.scene, False, False)})
+
+    def test_a_cutaway_leaves_out_the_triangles_beyond_its_plane(self):
+        cut = scene('\n[render]\nopaque = ["*"]\ncutaway = { point = [0.5, 0.5, 0.5], normal = [0.0, 0.0, 2.0] }\n')
+        np.testing.assert_allclose(cut.hints.cutaway[1], [0, 0, 1])
+        shapes = split_pairs(self.mesh, cut, False, False)
+        whole = split_pairs(self.mesh, scene('\n[render]\nopaque = ["*"]\n'), False, False)
+        kept = np.concatenate([s.vertices[s.faces].mean(axis=1) for s in shapes])
+        every = np.concatenate([s.vertices[s.faces].mean(axis=1) for s in whole])
+        # Exactly the triangles with centroids at z <= 1/2 stay (the voxel mesh has faces on both
+        # sides of the plane and on it: faces on the plane are kept).
+        self.assertEqual(len(kept), int((every[:, 2] <= 0.5).sum()))
+        self.assertTrue(np.all(kept[:, 2] <= 0.5))
+        # Opened shells show their inner sides: opaque surfaces become two-sided.
+        self.assertEqual(bsdf_dict(shapes[0], cut)["type"], "twosided")
+        self.assertEqual(bsdf_dict(shapes[0], cut)["material"]["type"], "roughplastic")
+        for bad in ("cutaway = { point = [0, 0, 0] }", "cutaway = { point = [0, 0, 0], normal = [0, 0, 0] }"):
+            with self.assertRaises(SceneError):
+                scene(f"\n[render]\n{bad}\n")
 
     def test_corner_normals_keep_creases_and_smooth_curves(self):
         # A cube: every corner normal is its face normal (90 degree creases are kept).

@@ -130,6 +130,10 @@ pub struct RenderHints {
     pub light: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fps: Option<u32>,
+    /// Cut-away view: triangles on the side `normal` points to are not drawn, and opaque
+    /// surfaces show both sides, so shells open toward the camera (paper 000 Figs. 23, 24).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cutaway: Option<HalfSpaceSpec>,
 }
 
 /// The tracker of a scene: `tracker = "front"` (a kind alone), or a `[tracker]` table with
