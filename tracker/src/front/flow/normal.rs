@@ -1,12 +1,16 @@
 //! Normal flow with area-weighted vertex normals (paper 000 §8.1, §8.3): each vertex moves
 //! by the speed of its sheet along the sheet's area-weighted normal, so a sphere's vertices
 //! stay on the sphere of radius r0 + s·t. Where sheets of several phase pairs meet (a triple
-//! curve), the vertex takes the area-weighted mean of their motions.
+//! curve), the vertex takes the motion that keeps each sheet moving at its own speed, in the
+//! least-squares sense.
 
 use glam::DVec3;
 use polyphase_grid::PhaseId;
 use rayon::prelude::*;
 
+use nalgebra::{Matrix3, Vector3};
+
+use super::offset::constrained_solution;
 use super::{interface_faces, normal_speed, PairSpeed};
 use crate::front::connectivity::Connectivity;
 
@@ -19,27 +23,52 @@ pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed]) -> Vec<DVec3> {
 }
 
 fn vertex_velocity(c: &Connectivity, speeds: &[PairSpeed], v: u32) -> DVec3 {
-    // Per unordered pair: (pair, Σ speed × area normal, Σ area, |speed|).
-    let mut sheets: Vec<([PhaseId; 2], DVec3, f64, f64)> = Vec::new();
+    // Per unordered pair: (pair, Σ area normal oriented into the pair's higher phase, Σ area).
+    let mut sheets: Vec<([PhaseId; 2], DVec3, f64)> = Vec::new();
     for (labels, area_normal) in interface_faces(c, v) {
-        let s = normal_speed(speeds, labels);
         let key = [labels[0].min(labels[1]), labels[0].max(labels[1])];
+        let oriented = if labels[0] == key[1] {
+            area_normal
+        } else {
+            -area_normal
+        };
         let area = 0.5 * area_normal.length();
         match sheets.iter_mut().find(|e| e.0 == key) {
             Some(e) => {
-                e.1 += s * area_normal;
+                e.1 += oriented;
                 e.2 += area;
             }
-            None => sheets.push((key, s * area_normal, area, s.abs())),
+            None => sheets.push((key, oriented, area)),
         }
     }
-    let total: f64 = sheets.iter().map(|e| e.2).sum();
-    if total <= 0.0 {
-        return DVec3::ZERO;
+    // Each sheet's normal and its speed along it (positive toward the higher phase).
+    let sheet = |(key, normal, _): &([PhaseId; 2], DVec3, f64)| {
+        (
+            normal.normalize_or_zero(),
+            normal_speed(speeds, [key[1], key[0]]),
+        )
+    };
+    match &sheets[..] {
+        [] => DVec3::ZERO,
+        [one] => {
+            let (n, s) = sheet(one);
+            s * n
+        }
+        // Where sheets meet, the vertex takes the motion that best keeps every sheet moving at
+        // its own speed, Σ Aₖ (d·nₖ − sₖ)² least, solved in the directions the sheets
+        // constrain: at a triple curve that is the curve's own motion (a lens of two shrinking
+        // spheres: the curve moves at s / sin of the sheets' half-angle), where the area-weighted
+        // mean of the sheets' motions lagged it by half and more, a zero-speed sheet diluting it.
+        _ => {
+            let mut quadric = Matrix3::<f64>::zeros();
+            let mut rhs = Vector3::<f64>::zeros();
+            for e in &sheets {
+                let (n, s) = sheet(e);
+                let n = Vector3::new(n.x, n.y, n.z);
+                quadric += e.2 * n * n.transpose();
+                rhs += e.2 * s * n;
+            }
+            constrained_solution(quadric, rhs)
+        }
     }
-    sheets
-        .iter()
-        .map(|(_, m, area, speed)| m.normalize_or_zero() * *speed * *area)
-        .sum::<DVec3>()
-        / total
 }

@@ -32,20 +32,26 @@ pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed]) -> Vec<DVec3> {
                 quadric += area * n * n.transpose();
                 rhs += area * normal_speed(speeds, labels) * n;
             }
-            let eigen = SymmetricEigen::new(quadric);
-            let largest = eigen.eigenvalues.amax();
-            if largest <= 0.0 {
-                return DVec3::ZERO;
-            }
-            let mut d = Vector3::<f64>::zeros();
-            for k in 0..3 {
-                let lambda = eigen.eigenvalues[k];
-                if lambda > NULL_SPACE * largest {
-                    let e = eigen.eigenvectors.column(k);
-                    d += e * (e.dot(&rhs) / lambda);
-                }
-            }
-            DVec3::new(d.x, d.y, d.z)
+            constrained_solution(quadric, rhs)
         })
         .collect()
+}
+
+/// The least-squares solution of `quadric · d = rhs` in the directions the quadric constrains
+/// (eigenvalues above [`NULL_SPACE`] of the largest), zero along the others.
+pub(super) fn constrained_solution(quadric: Matrix3<f64>, rhs: Vector3<f64>) -> DVec3 {
+    let eigen = SymmetricEigen::new(quadric);
+    let largest = eigen.eigenvalues.amax();
+    if largest <= 0.0 {
+        return DVec3::ZERO;
+    }
+    let mut d = Vector3::<f64>::zeros();
+    for k in 0..3 {
+        let lambda = eigen.eigenvalues[k];
+        if lambda > NULL_SPACE * largest {
+            let e = eigen.eigenvectors.column(k);
+            d += e * (e.dot(&rhs) / lambda);
+        }
+    }
+    DVec3::new(d.x, d.y, d.z)
 }
