@@ -31,6 +31,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ),
     ("fall", include_str!("../builtin/fall.toml")),
     ("droplet", include_str!("../builtin/droplet.toml")),
+    ("lens", include_str!("../builtin/lens.toml")),
     ("balls", include_str!("../builtin/balls.toml")),
     ("drop_pool", include_str!("../builtin/drop_pool.toml")),
     ("pool", include_str!("../builtin/pool.toml")),
