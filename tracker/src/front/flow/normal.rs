@@ -5,10 +5,9 @@
 //! least-squares sense.
 
 use glam::DVec3;
+use nalgebra::{Matrix3, Vector3};
 use polyphase_grid::PhaseId;
 use rayon::prelude::*;
-
-use nalgebra::{Matrix3, Vector3};
 
 use super::offset::constrained_solution;
 use super::{interface_faces, normal_speed, PairSpeed};
