@@ -33,7 +33,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("droplet", include_str!("../builtin/droplet.toml")),
     ("lens", include_str!("../builtin/lens.toml")),
     ("balls", include_str!("../builtin/balls.toml")),
-    ("balls_tension", include_str!("../builtin/balls_tension.toml")),
+    (
+        "balls_tension",
+        include_str!("../builtin/balls_tension.toml"),
+    ),
     ("drop_pool", include_str!("../builtin/drop_pool.toml")),
     ("pool", include_str!("../builtin/pool.toml")),
     ("viscous", include_str!("../builtin/viscous.toml")),
