@@ -92,6 +92,20 @@ fn simulate<T: InterfaceTracker>(
         scene.file.tracker.kind,
         root.display()
     );
+    let unbalanced: Vec<String> = scene
+        .tension
+        .unbalanced_triples()
+        .into_iter()
+        .map(|t| format!("({})", t.map(|p| names[usize::from(p)].as_str()).join(", ")))
+        .collect();
+    if !unbalanced.is_empty() {
+        eprintln!(
+            "note: no Neumann triangle for the tensions of {} (one σ is at least the sum of the \
+             other two): where those three phases meet, the pull on their triple curve cannot \
+             balance and the time step may collapse",
+            unbalanced.join(", ")
+        );
+    }
     let done = match progress_at {
         Progress::Fresh(first) => {
             summary.add_step(&first);

@@ -44,6 +44,31 @@ impl Tension {
         }
         out
     }
+
+    /// Triples of phases (ascending) whose tensions have no Neumann triangle: one σ is at least
+    /// the sum of the other two (an unlisted pair counts 0), with at least two of them
+    /// non-zero. Where such three meet no angles balance the pulls on their triple curve (the
+    /// phase between the other two spreads), so its pull never vanishes; `balls` with tension
+    /// only against air saw its step fall fivefold there (README, "Surface tension").
+    pub fn unbalanced_triples(&self) -> Vec<[PhaseId; 3]> {
+        let mut out = Vec::new();
+        for a in 0..self.n {
+            for b in a + 1..self.n {
+                for c in b + 1..self.n {
+                    let mut s = [
+                        self.sigma[a * self.n + b],
+                        self.sigma[a * self.n + c],
+                        self.sigma[b * self.n + c],
+                    ];
+                    s.sort_by(f64::total_cmp);
+                    if s[1] > 0.0 && s[2] >= s[0] + s[1] {
+                        out.push([a, b, c].map(|p| p as PhaseId));
+                    }
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Checks the `[[tension]]` entries against the phase names: known and distinct phases, σ
@@ -123,6 +148,25 @@ mod tests {
 
     fn names() -> Vec<String> {
         ["air", "water", "oil"].map(String::from).to_vec()
+    }
+
+    /// Neumann's triangle: σ_wa = 0.0728 < 0.0275 + 0.0535 (hexadecane on water) balances;
+    /// without the oil–water tension, or with ethanol's 0.022 against air and none against
+    /// water, the largest σ is at least the sum of the others and nothing balances.
+    #[test]
+    fn triples_without_a_neumann_triangle_are_found() {
+        let compile = |specs: &[TensionSpec]| compile_tension(specs, &names(), true, &bad).unwrap();
+        let lens = compile(&[
+            spec("water", "air", 0.0728),
+            spec("oil", "air", 0.0275),
+            spec("oil", "water", 0.0535),
+        ]);
+        assert!(lens.unbalanced_triples().is_empty());
+        let spreading = compile(&[spec("water", "air", 0.0728), spec("oil", "air", 0.022)]);
+        assert_eq!(spreading.unbalanced_triples(), vec![[0, 1, 2]]);
+        // A single tension makes no junction pull: nothing to warn about.
+        let single = compile(&[spec("water", "air", 0.0728)]);
+        assert!(single.unbalanced_triples().is_empty());
     }
 
     #[test]
