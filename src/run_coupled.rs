@@ -22,8 +22,7 @@ use crate::slab::{self, mid_plane, SlabFrame};
 use crate::summary::Summary;
 
 /// Runs a validated coupled scene into `root` (already checked to be writable by `folder`),
-/// from frame 0 or from a checkpoint, with the scene's tracker (scene validation refuses the
-/// front tracker on coupled scenes until it conserves volume in a fluid's velocity).
+/// from frame 0 or from a checkpoint, with the scene's tracker.
 pub fn run_coupled(scene: &Scene, folder: &RunFolder, root: &Path, start: Start) -> Result<()> {
     let (sim, hash, progress_at, prior) = match start {
         Start::Fresh(hash) => {

@@ -302,7 +302,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         let t1 = Instant::now();
         let before = match self.end_velocity.take() {
             Some(v) => v,
-            None => self.solver.interface_velocity(&field, &self.phases, band)?,
+            None => self.interface_velocity(&field, band)?,
         };
         let mut interface_secs = t1.elapsed().as_secs_f64();
         let solved = match &self.tension {
@@ -331,7 +331,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         report.pressure_iterations += solved.pressure.iterations;
         report.viscosity_iterations += solved.viscosity.map_or(0, |v| v.iterations);
         let t2 = Instant::now();
-        let after = self.solver.interface_velocity(&field, &self.phases, band)?;
+        let after = self.interface_velocity(&field, band)?;
         self.end_velocity = Some(after.clone());
         // The interfaces move over the step with the mean of its start and end velocities
         // (trapezoidal rule): the end velocity alone runs a falling drop ahead by g·t·dt/2.
@@ -360,6 +360,17 @@ impl<T: InterfaceTracker> CoupledSim<T> {
             self.flush(report)?;
         }
         Ok(())
+    }
+
+    /// The velocity the tracker moves in (see [`Solver::interface_velocity`]), made
+    /// divergence-free again for a tracker that asks for it.
+    fn interface_velocity(&self, field: &PhaseField, band: u8) -> Result<MacGrid, CouplingError> {
+        Ok(if self.tracker.needs_solenoidal_velocity() {
+            self.solver
+                .solenoidal_interface_velocity(field, &self.phases, band)?
+        } else {
+            self.solver.interface_velocity(field, &self.phases, band)?
+        })
     }
 
     /// Advances the tracker over the pending solver steps, each in its own velocity

@@ -104,19 +104,6 @@ impl Scene {
         }
         let velocity = compile_velocity(&file.velocity, &bad)?;
         let ratio = check_solver(&mut file, &bad)?;
-        // Measured with wall vertices sliding along with contact lines: `dambreak_column` at
-        // its resolution keeps its water within −0.3 %/+0.8 % of frame 0 to t = 0.3 s and its
-        // surge front within 0.5 % of the contouring tracker's, but in `balls` at 64 each ball
-        // that lands loses 30–40 % of its volume in the frame it meets the floor (merging on
-        // or off), 95 % of the water by t = 0.8 s; the front tracker has no volume correction.
-        if ratio.is_some() && file.tracker.kind == TrackerKind::Front {
-            return Err(bad(
-                "tracker",
-                "the front tracker runs passive scenes only until it conserves each liquid's \
-                 volume in a fluid's velocity; use tracker = \"contour\" for coupled scenes"
-                    .into(),
-            ));
-        }
         fill_foam_phases(&mut file, &bad)?;
         let phases = compile_phases(&file, &bad)?;
         let find = |name: &str, place: &str| find_phase(&phases, name, place, &bad);

@@ -218,11 +218,84 @@ impl Solver {
         phases: &[PhaseProps],
         band: u8,
     ) -> Result<MacGrid, SolverError> {
+        Ok(self.continued_velocity(field, phases, band)?.velocity)
+    }
+
+    /// [`Solver::interface_velocity`] made discretely divergence-free again, for a tracker
+    /// that moves its surfaces by the velocity alone (the front tracker). The continuation
+    /// overwrites light faces without regard to flux: under a ball landing on the floor, the
+    /// air cell between them gets the water's downward velocity on its top face and 0 on the
+    /// floor, and the ball's bottom is squeezed out of existence (`balls` at 64 lost 31 % of
+    /// its water that way). A weighted projection, min Σ w (Δu)² subject to zero divergence,
+    /// restores the flux balance: faces a heavy phase owns and the continuation's first
+    /// layer are held (w = 10⁶, they keep the liquid's motion, so a surge front keeps its
+    /// speed), the rest (light faces and the continuation's outer layers) take up the
+    /// correction.
+    pub fn solenoidal_interface_velocity(
+        &self,
+        field: &PhaseField,
+        phases: &[PhaseProps],
+        band: u8,
+    ) -> Result<MacGrid, SolverError> {
+        /// Weights of held and free faces: a held face takes 10⁻⁶ of the correction a free
+        /// one next to it would.
+        const HELD: f64 = 1e6;
+        const FREE: f64 = 1.0;
+        /// A phase this many times denser than the lightest keeps its own faces.
+        const HEAVY: f64 = 10.0;
+        let Continued {
+            velocity: mut out,
+            layers,
+            owners,
+        } = self.continued_velocity(field, phases, band)?;
+        let lightest = phases
+            .iter()
+            .map(|p| p.density)
+            .fold(f64::INFINITY, f64::min);
+        let weights = [0, 1, 2].map(|a| {
+            layers[a]
+                .par_iter()
+                .zip(&owners[a])
+                .map(|(&layer, &own)| {
+                    let heavy = phases[usize::from(own)].density >= HEAVY * lightest;
+                    let held = match layer {
+                        0 => heavy,
+                        1 => true,
+                        _ => false,
+                    };
+                    if held {
+                        HELD
+                    } else {
+                        FREE
+                    }
+                })
+                .collect()
+        });
+        pressure::project(
+            &mut out,
+            &self.open,
+            &weights,
+            1.0,
+            &self.config.pressure,
+            None,
+        )?;
+        Ok(out)
+    }
+
+    /// The continuation of [`Solver::interface_velocity`], with where each face's value came
+    /// from.
+    fn continued_velocity(
+        &self,
+        field: &PhaseField,
+        phases: &[PhaseProps],
+        band: u8,
+    ) -> Result<Continued, SolverError> {
         let seeds = self.face_phases(field, phases, false)?;
         let density = |p: PhaseId| phases[usize::from(p)].density;
         let mut order = owning_phases(&seeds, &self.open);
         order.sort_by(|&a, &b| density(a).total_cmp(&density(b)).then(a.cmp(&b)));
         let mut out = self.velocity.clone();
+        let mut from = out.comps.clone().map(|c| vec![0u8; c.len()]);
         for &phase in &order {
             let ext = extend(
                 &self.velocity,
@@ -231,20 +304,28 @@ impl Solver {
                 band,
             );
             let parts = ext.field.comps.iter().zip(&ext.layer).zip(&seeds);
-            for (comp, ((values, layers), own)) in out.comps.iter_mut().zip(parts) {
+            for ((comp, from), ((values, layers), own)) in
+                out.comps.iter_mut().zip(from.iter_mut()).zip(parts)
+            {
                 comp.par_iter_mut()
+                    .zip(from.par_iter_mut())
                     .zip(values)
                     .zip(layers)
                     .zip(own)
-                    .for_each(|(((o, &v), &layer), &own)| {
+                    .for_each(|((((o, f), &v), &layer), &own)| {
                         let lighter = density(own) < density(phase);
                         if layer != 0 && layer != UNREACHED && lighter {
                             *o = v;
+                            *f = layer;
                         }
                     });
             }
         }
-        Ok(out)
+        Ok(Continued {
+            velocity: out,
+            layers: from,
+            owners: seeds,
+        })
     }
 
     /// The phases each face's current velocity belongs to: [`SolverState::seed_phases`]
@@ -493,4 +574,14 @@ impl Solver {
             timings,
         })
     }
+}
+
+/// A velocity continued across interfaces ([`Solver::interface_velocity`]) and its sources.
+struct Continued {
+    velocity: MacGrid,
+    /// Per face, the ring its value came from: 0 for the face's own phase, k for the k-th ring
+    /// of a denser phase's continuation.
+    layers: [Vec<u8>; 3],
+    /// Per face, the phase that owns it.
+    owners: [Vec<PhaseId>; 3],
 }

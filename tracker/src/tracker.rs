@@ -102,6 +102,13 @@ pub trait InterfaceTracker: Send + Sync {
     fn region_count(&self) -> Option<usize> {
         None
     }
+    /// Whether the velocity this tracker moves in must be discretely divergence-free near
+    /// the interfaces: true for a tracker that carries its surfaces by the velocity alone
+    /// (the front tracker), so that any divergence shows up as lost or gained volume; false
+    /// (the default) for one that rebuilds and corrects its phases every step.
+    fn needs_solenoidal_velocity(&self) -> bool {
+        false
+    }
 }
 
 /// A boxed tracker is a tracker: the run loops hold whichever kind the scene asked for.
@@ -143,6 +150,9 @@ impl<T: InterfaceTracker + ?Sized> InterfaceTracker for Box<T> {
     }
     fn region_count(&self) -> Option<usize> {
         (**self).region_count()
+    }
+    fn needs_solenoidal_velocity(&self) -> bool {
+        (**self).needs_solenoidal_velocity()
     }
 }
 

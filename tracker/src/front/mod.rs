@@ -9,6 +9,7 @@ pub mod connectivity;
 pub mod flow;
 pub mod front_tracker;
 pub mod intersection;
+mod least_squares;
 pub mod params;
 pub mod predicates;
 pub mod remesh;

@@ -11,6 +11,7 @@ mod flip;
 mod safety;
 mod smooth;
 mod split;
+mod volume;
 
 use glam::DVec3;
 use polyphase_grid::{PhaseId, OUTSIDE};
@@ -21,6 +22,7 @@ use super::connectivity::Connectivity;
 #[cfg(test)]
 use super::connectivity::DEAD;
 use super::params::{Bounds, FrontParams};
+use volume::volume_change;
 
 /// What one remeshing call did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -56,10 +58,18 @@ impl RemeshStats {
     }
 }
 
-/// Remeshes `c` in place toward edge length `target` and compacts it (indices change).
-pub fn improve(c: &mut Connectivity, params: &FrontParams, target: f64) -> RemeshStats {
+/// Remeshes `c` in place toward edge length `target` and compacts it (indices change); with
+/// `keep_volumes`, collapses and ridge moves are placed so that no phase's volume changes
+/// (see `remesh/volume.rs`).
+pub fn improve(
+    c: &mut Connectivity,
+    params: &FrontParams,
+    target: f64,
+    keep_volumes: bool,
+) -> RemeshStats {
     let mut r = Remesher::new(c, Bounds::new(params, target));
     r.butterfly = params.butterfly;
+    r.keep_volumes = keep_volumes;
     r.split_pass();
     r.collapse_pass();
     r.flip_pass();
@@ -126,6 +136,8 @@ pub(crate) struct Remesher<'a> {
     pub(crate) coincident: bool,
     /// Splits move the new vertex to its butterfly point ([`FrontParams::butterfly`]).
     butterfly: bool,
+    /// Collapses and ridge moves keep every phase's volume ([`improve`]).
+    pub(crate) keep_volumes: bool,
     pub(crate) stats: RemeshStats,
     /// Runs the invariant checks after every operation (tests).
     #[cfg(test)]
@@ -154,6 +166,7 @@ impl<'a> Remesher<'a> {
             junction: false,
             coincident: false,
             butterfly: false,
+            keep_volumes: true,
             stats: RemeshStats::default(),
             #[cfg(test)]
             verify: false,
@@ -320,36 +333,6 @@ impl<'a> Remesher<'a> {
 pub(crate) fn tri_box(c: &Connectivity, t: u32) -> (DVec3, DVec3) {
     let [a, b, d] = c.triangle(t).map(|v| c.position(v));
     (a.min(b).min(d), a.max(b).max(d))
-}
-
-/// Largest change of any phase's volume when the triangles `old` are replaced by `new` (both
-/// bounding the same hole of the rest of the mesh): the divergence-theorem tetra sums of
-/// [`crate::mesh::LabeledMesh::phase_volumes`] about a common local reference point, whose
-/// choice cancels because the two patches share their boundary.
-fn volume_change(old: &[Tri], new: &[Tri]) -> f64 {
-    let Some(first) = old.first() else {
-        return 0.0;
-    };
-    let r = first.p[0];
-    let mut change: Vec<(PhaseId, f64)> = Vec::new();
-    let mut add = |phase: PhaseId, v: f64| {
-        if phase == OUTSIDE {
-            return;
-        }
-        match change.iter_mut().find(|(p, _)| *p == phase) {
-            Some((_, x)) => *x += v,
-            None => change.push((phase, v)),
-        }
-    };
-    for (tris, sign) in [(old, -1.0), (new, 1.0)] {
-        for t in tris {
-            let [a, b, c] = t.p.map(|p| p - r);
-            let v = sign * a.dot(b.cross(c)) / 6.0;
-            add(t.labels[1], v);
-            add(t.labels[0], -v);
-        }
-    }
-    change.iter().map(|(_, v)| v.abs()).fold(0.0, f64::max)
 }
 
 /// Does replacing `old` by `new` change the volume the domain boundary faces (`OUTSIDE`

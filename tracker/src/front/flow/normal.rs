@@ -9,9 +9,10 @@ use nalgebra::{Matrix3, Vector3};
 use polyphase_grid::PhaseId;
 use rayon::prelude::*;
 
-use super::offset::constrained_solution;
+use super::offset::NULL_SPACE;
 use super::{interface_faces, normal_speed, PairSpeed};
 use crate::front::connectivity::Connectivity;
+use crate::front::least_squares::constrained_solution;
 
 /// Velocity of every vertex (zero for unused vertices and those only on domain walls).
 pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed]) -> Vec<DVec3> {
@@ -67,7 +68,7 @@ fn vertex_velocity(c: &Connectivity, speeds: &[PairSpeed], v: u32) -> DVec3 {
                 quadric += e.2 * n * n.transpose();
                 rhs += e.2 * s * n;
             }
-            constrained_solution(quadric, rhs)
+            constrained_solution(quadric, rhs, NULL_SPACE)
         }
     }
 }

@@ -7,16 +7,17 @@
 //! vertices do not drift tangentially.
 
 use glam::DVec3;
-use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use super::{interface_faces, normal_speed, PairSpeed};
 use crate::front::connectivity::Connectivity;
+use crate::front::least_squares::constrained_solution;
 
 /// Eigenvalues below this fraction of the largest are the quadric's null space: two sheets
 /// meeting at dihedral angle θ give the ratio tan²(θ/2), 0.03 at θ ≈ 20°, while the normals
 /// of a smooth one-ring a tenth of the curvature radius across spread by under 0.01.
-const NULL_SPACE: f64 = 0.03;
+pub(super) const NULL_SPACE: f64 = 0.03;
 
 /// Velocity of every vertex (zero where no face constrains it).
 pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed]) -> Vec<DVec3> {
@@ -32,26 +33,7 @@ pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed]) -> Vec<DVec3> {
                 quadric += area * n * n.transpose();
                 rhs += area * normal_speed(speeds, labels) * n;
             }
-            constrained_solution(quadric, rhs)
+            constrained_solution(quadric, rhs, NULL_SPACE)
         })
         .collect()
-}
-
-/// The least-squares solution of `quadric · d = rhs` in the directions the quadric constrains
-/// (eigenvalues above [`NULL_SPACE`] of the largest), zero along the others.
-pub(super) fn constrained_solution(quadric: Matrix3<f64>, rhs: Vector3<f64>) -> DVec3 {
-    let eigen = SymmetricEigen::new(quadric);
-    let largest = eigen.eigenvalues.amax();
-    if largest <= 0.0 {
-        return DVec3::ZERO;
-    }
-    let mut d = Vector3::<f64>::zeros();
-    for k in 0..3 {
-        let lambda = eigen.eigenvalues[k];
-        if lambda > NULL_SPACE * largest {
-            let e = eigen.eigenvectors.column(k);
-            d += e * (e.dot(&rhs) / lambda);
-        }
-    }
-    DVec3::new(d.x, d.y, d.z)
 }

@@ -3,13 +3,15 @@
 //! toward the area-weighted centroid of its triangles with the normal component of that
 //! displacement removed (the area-weighted normal is the gradient of the volume enclosed by the
 //! vertex's fan, so the fan's volume does not change); a ridge vertex (two feature edges,
-//! non-manifold curves included) moves only along the ridge, toward the midpoint of its two
-//! ridge neighbours; peaks, ends of ridges and other non-manifold vertices stay. Each
-//! displacement is checked as a pseudo-motion.
+//! non-manifold curves included) moves along the ridge, toward the midpoint of its two ridge
+//! neighbours, and then by the least needed to keep every phase's volume (`volume.rs`); peaks,
+//! ends of ridges and other non-manifold vertices stay. Each displacement is checked as a
+//! pseudo-motion.
 
 use glam::DVec3;
 
 use super::features::Kind;
+use super::volume::volume_preserving;
 use super::{Remesher, Tri};
 
 impl Remesher<'_> {
@@ -72,7 +74,28 @@ impl Remesher<'_> {
                 let dir = ((p1 - x).normalize_or_zero() - (p2 - x).normalize_or_zero())
                     .normalize_or_zero();
                 let d = 0.5 * (p1 + p2) - x;
-                Some(x + d.dot(dir) * dir)
+                let along = x + d.dot(dir) * dir;
+                // Along a curved ridge every phase around it gains or loses a little; the
+                // move is completed in the phases' volume gradients so that none does.
+                let tris = self.c.vertex_triangles(v);
+                let old: Vec<Tri> = tris.iter().map(|&t| self.tri(t)).collect();
+                let new_at = |p: DVec3| -> Vec<Tri> {
+                    old.iter()
+                        .zip(tris)
+                        .map(|(o, &t)| Tri {
+                            p: self
+                                .c
+                                .triangle(t)
+                                .map(|u| if u == v { p } else { self.c.position(u) }),
+                            labels: o.labels,
+                        })
+                        .collect()
+                };
+                Some(if self.keep_volumes {
+                    volume_preserving(&old, &new_at, along, (p1 - p2).length())
+                } else {
+                    along
+                })
             }
             _ => None,
         }

@@ -1,0 +1,87 @@
+//! The front tracker driving the fluid (issue 12): `dambreak_column` at low resolution, the
+//! mesh checked every 5 ms (closed, label-consistent, intersection-free), its water's volume
+//! held without any correction, and its surge front beside the contouring tracker's under the
+//! same solver.
+
+mod common;
+
+use common::builtin_at;
+use polyphase_coupling::from_scene;
+use polyphase_scenes::{Scene, TrackerKind};
+use polyphase_tracker::front::intersection::self_intersections;
+use polyphase_tracker::{invariants, InterfaceTracker, LabeledMesh, PhaseId};
+
+/// Tracker cells along x (64 × 32 × 2; the solver 32 × 16): a few seconds a run.
+const RESOLUTION: i64 = 64;
+/// Simulated time: the surge reaches x = 0.40 m of the 0.5 m box, before it hits the wall.
+const END: f64 = 0.2;
+/// Frames (checks and comparisons): one every 5 ms, about every second solver step.
+const FRAMES: usize = 40;
+
+/// The farthest x of any vertex on a water–air face.
+fn surge_front(mesh: &LabeledMesh, water: PhaseId, air: PhaseId) -> f64 {
+    mesh.triangles
+        .iter()
+        .zip(&mesh.labels)
+        .filter(|(_, l)| l.contains(&water) && l.contains(&air))
+        .flat_map(|(t, _)| t.iter().map(|&v| mesh.vertices[v as usize].x))
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// Runs `scene` to `END` frame by frame (the run loop's schedule: the tracker follows the
+/// solver every few steps and at each frame end), checking the mesh after each frame when
+/// `check` is set, and returns the surge front and the water's volume at each frame end.
+fn run(scene: &Scene, check: bool) -> Vec<(f64, f64)> {
+    let names = scene.phase_names();
+    let index = |n: &str| names.iter().position(|x| x == n).expect("phase") as PhaseId;
+    let (water, air) = (index("water"), index("air"));
+    let (mut sim, _) = from_scene(scene).expect("coupled scene");
+    let mut out = Vec::new();
+    for frame in 1..=FRAMES {
+        sim.advance_to(END * frame as f64 / FRAMES as f64)
+            .expect("frame");
+        let mesh = sim.tracker().mesh();
+        if check {
+            invariants::check(mesh, 0.0).unwrap_or_else(|e| panic!("frame {frame}: {e}"));
+            let hits = self_intersections(mesh);
+            assert!(hits.is_empty(), "frame {frame}: {hits:?}");
+        }
+        out.push((
+            surge_front(mesh, water, air),
+            sim.tracker().phase_volumes()[usize::from(water)],
+        ));
+    }
+    out
+}
+
+#[test]
+fn the_front_tracker_carries_a_collapsing_column_like_the_contouring_tracker() {
+    let contour = builtin_at("dambreak_column", RESOLUTION);
+    let front = contour
+        .with_tracker(TrackerKind::Front)
+        .expect("valid override");
+    let start = {
+        let (sim, _) = from_scene(&front).expect("coupled scene");
+        let names = front.phase_names();
+        let water = names.iter().position(|x| x == "water").expect("water");
+        sim.tracker().phase_volumes()[water]
+    };
+    let by_front = run(&front, true);
+    let by_contour = run(&contour, false);
+    for (k, ((f, v), (c, _))) in by_front.iter().zip(&by_contour).enumerate() {
+        // The issue's bound: the mesh moves in a divergence-free velocity and its remeshing
+        // keeps volumes, so no correction is needed to hold the water within 0.5 % (measured
+        // +0.07 % at the end).
+        let drift = (v - start) / start;
+        assert!(drift.abs() < 5e-3, "frame {}: water {drift:+.2e}", k + 1);
+        // The issue's bound: the two trackers' surge fronts within 3 % of each other
+        // (measured here within 0.9 %, at the default resolution within 1.8 %). It holds for
+        // the run loop's schedule: with the tracker following every solver step instead, the
+        // fronts part by 7 % at t = 0.2 s (front slower, contouring faster), not explained.
+        assert!(
+            ((f - c) / c).abs() < 0.03,
+            "frame {}: front {f} against contouring {c}",
+            k + 1
+        );
+    }
+}
