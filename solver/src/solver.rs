@@ -227,10 +227,13 @@ impl Solver {
     /// air cell between them gets the water's downward velocity on its top face and 0 on the
     /// floor, and the ball's bottom is squeezed out of existence (`balls` at 64 lost 31 % of
     /// its water that way). A weighted projection, min Σ w (Δu)² subject to zero divergence,
-    /// restores the flux balance: faces a heavy phase owns and the continuation's first
-    /// layer are held (w = 10⁶, they keep the liquid's motion, so a surge front keeps its
-    /// speed), the rest (light faces and the continuation's outer layers) take up the
-    /// correction.
+    /// restores the flux balance: the faces a heavy phase owns and all the continuation wrote
+    /// are held (w = 10⁶: every surface keeps its liquid's motion, so a surge front keeps its
+    /// speed), the light phase's own faces beyond the continuation take up the correction.
+    /// Held faces must reach past the interpolation stencil of every surface point: with
+    /// only the continuation's first ring held, the correction's jump at the next ring
+    /// sheared the surfaces (`balls` at 64: every liquid +0.3 to +0.9 % by t = 0.2 s and the
+    /// mesh 10 K → 65 K triangles by 0.8 s, against within +0.3 % and 7.6 K held whole).
     pub fn solenoidal_interface_velocity(
         &self,
         field: &PhaseField,
@@ -258,11 +261,7 @@ impl Solver {
                 .zip(&owners[a])
                 .map(|(&layer, &own)| {
                     let heavy = phases[usize::from(own)].density >= HEAVY * lightest;
-                    let held = match layer {
-                        0 => heavy,
-                        1 => true,
-                        _ => false,
-                    };
+                    let held = layer != 0 || heavy;
                     if held {
                         HELD
                     } else {
