@@ -294,7 +294,7 @@ impl Solver {
         let mut order = owning_phases(&seeds, &self.open);
         order.sort_by(|&a, &b| density(a).total_cmp(&density(b)).then(a.cmp(&b)));
         let mut out = self.velocity.clone();
-        let mut from = out.comps.clone().map(|c| vec![0u8; c.len()]);
+        let mut from = [0, 1, 2].map(|a| vec![0u8; out.comps[a].len()]);
         for &phase in &order {
             let ext = extend(
                 &self.velocity,

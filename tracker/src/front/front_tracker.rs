@@ -157,7 +157,7 @@ impl FrontTracker {
         // done, so that the first steps do not carry it (at most 4 passes).
         for _ in 0..4 {
             // Plain positions: the start may be handed to a mesh-driven flow (with volume-keeping
-            // collapses here the 64-cell `foam` test ran past 15 minutes instead of about 3).
+            // collapses here the 64-cell `foam` test ran past 12 minutes in release, not 22 s).
             let stats = improve(&mut tracker.c, &tracker.params, tracker.target, false);
             tracker.report.remesh = stats;
             if stats.splits + stats.collapses < tracker.c.mesh.triangles.len() / 1000 {

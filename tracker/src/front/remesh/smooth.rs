@@ -75,27 +75,14 @@ impl Remesher<'_> {
                     .normalize_or_zero();
                 let d = 0.5 * (p1 + p2) - x;
                 let along = x + d.dot(dir) * dir;
+                if !self.keep_volumes {
+                    return Some(along);
+                }
                 // Along a curved ridge every phase around it gains or loses a little; the
                 // move is completed in the phases' volume gradients so that none does.
-                let tris = self.c.vertex_triangles(v);
-                let old: Vec<Tri> = tris.iter().map(|&t| self.tri(t)).collect();
-                let new_at = |p: DVec3| -> Vec<Tri> {
-                    old.iter()
-                        .zip(tris)
-                        .map(|(o, &t)| Tri {
-                            p: self
-                                .c
-                                .triangle(t)
-                                .map(|u| if u == v { p } else { self.c.position(u) }),
-                            labels: o.labels,
-                        })
-                        .collect()
-                };
-                Some(if self.keep_volumes {
-                    volume_preserving(&old, &new_at, along, (p1 - p2).length())
-                } else {
-                    along
-                })
+                let old: Vec<Tri> = self.star(v);
+                let new_at = |p: DVec3| self.star_moved(v, p);
+                Some(volume_preserving(&old, &new_at, along, (p1 - p2).length()))
             }
             _ => None,
         }
@@ -130,19 +117,8 @@ impl Remesher<'_> {
             self.stats.bound_cancelled += 1;
             return false;
         }
-        let tris: Vec<u32> = self.c.vertex_triangles(v).to_vec();
-        let old: Vec<Tri> = tris.iter().map(|&t| self.tri(t)).collect();
-        let new: Vec<Tri> = tris
-            .iter()
-            .zip(&old)
-            .map(|(&t, o)| Tri {
-                p: self
-                    .c
-                    .triangle(t)
-                    .map(|u| if u == v { p } else { self.c.position(u) }),
-                labels: o.labels,
-            })
-            .collect();
+        let old = self.star(v);
+        let new = self.star_moved(v, p);
         if old
             .iter()
             .zip(&new)
@@ -156,5 +132,29 @@ impl Remesher<'_> {
         }
         self.move_vertex(v, p);
         true
+    }
+
+    /// The triangles around `v`.
+    fn star(&self, v: u32) -> Vec<Tri> {
+        self.c
+            .vertex_triangles(v)
+            .iter()
+            .map(|&t| self.tri(t))
+            .collect()
+    }
+
+    /// The triangles around `v` as they would be with `v` at `p`.
+    fn star_moved(&self, v: u32, p: DVec3) -> Vec<Tri> {
+        self.c
+            .vertex_triangles(v)
+            .iter()
+            .map(|&t| Tri {
+                p: self
+                    .c
+                    .triangle(t)
+                    .map(|u| if u == v { p } else { self.c.position(u) }),
+                labels: self.c.labels(t),
+            })
+            .collect()
     }
 }
