@@ -1,5 +1,5 @@
 //! Checkpoint and resume through the binary: a run killed with SIGKILL mid-way and resumed
-//! (coupled, passive, and passive with the front tracker) writes the same frame bytes as an
+//! (coupled and passive, with either tracker) writes the same frame bytes as an
 //! uninterrupted run; unusable folders are refused untouched.
 
 mod common;
@@ -116,22 +116,22 @@ fn coupled_run_killed_twice_and_resumed_matches_uninterrupted_run() {
     assert_eq!(stats_without_timings(&a), stats_without_timings(&b));
 }
 
-/// Runs `scene` at `resolution` for `frames` frames into `DIR/a`; runs it again into `DIR/b`,
-/// killed once `kill_at` (a path in the run folder) exists, and resumes that; asserts the two
-/// wrote the same frames and the same stats lines (timings aside). Returns `DIR/b`'s stats.
+/// Runs `scene` at `resolution` for `frames` frames (with `extra` arguments) into `DIR/a`;
+/// runs it again into `DIR/b`, killed once `kill_at` (a path in the run folder) exists, and
+/// resumes that; asserts the two wrote the same frames and the same stats lines (timings
+/// aside). Returns `DIR/b`'s stats.
 fn kill_resume_and_compare(
     dir: &str,
-    scene: &str,
-    resolution: u32,
-    frames: u32,
+    (scene, resolution, frames, extra): (&str, u32, u32, &[&str]),
     kill_at: &str,
 ) -> Vec<Value> {
     let dir = scratch(dir);
     let (a, b) = (dir.join("a"), dir.join("b"));
-    let o = run_small(scene, resolution, frames, &a, &[]);
+    let o = run_small(scene, resolution, frames, &a, extra);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (res, n) = (resolution.to_string(), frames.to_string());
-    let args = ["run", scene, "--resolution", &res, "--frames", &n];
+    let mut args = vec!["run", scene, "--resolution", &res, "--frames", &n];
+    args.extend(extra);
     run_and_kill(&args, &b, kill_at);
     assert!(!b.join(format!("frames/{frames:04}.ply")).exists());
     resume(&b, &[]);
@@ -146,7 +146,11 @@ fn passive_run_killed_mid_frame_and_resumed_matches_uninterrupted_run() {
     // circle3_rotate is periodic: its last frame line compares with the first mesh, which the
     // resumed run has to rebuild. The first checkpoint is written right after frame 0: the
     // kill lands in frame 1.
-    kill_resume_and_compare("resume_passive", "circle3_rotate", 32, 4, "checkpoint.bin");
+    kill_resume_and_compare(
+        "resume_passive",
+        ("circle3_rotate", 32, 4, &[]),
+        "checkpoint.bin",
+    );
 }
 
 #[test]
@@ -154,11 +158,23 @@ fn front_run_killed_mid_run_and_resumed_matches_uninterrupted_run() {
     // merge2 at 16³: the spheres meet near t = 0.2 (frame 2 of 6) and merge, so the
     // checkpoint and the resumed frames straddle the topology change. Volumes, regions and
     // the topology events per frame agree too.
-    let stats = kill_resume_and_compare("resume_front", "merge2", 16, 6, "frames/0002.ply");
+    let stats = kill_resume_and_compare("resume_front", ("merge2", 16, 6, &[]), "frames/0002.ply");
     let merged = stats
         .iter()
         .any(|l| l["events"]["merge_snaps"].as_u64().is_some_and(|n| n > 0));
     assert!(merged, "the spheres never merged");
+}
+
+#[test]
+fn front_coupled_run_killed_mid_run_and_resumed_matches_uninterrupted_run() {
+    // The front tracker driving the fluid (issue 12): the checkpoint holds the mesh, the
+    // solver's state and the steps the tracker has not yet followed; frames and stats lines
+    // (volumes, surge front, steps) of the resumed run are those of the uninterrupted one.
+    kill_resume_and_compare(
+        "resume_front_coupled",
+        ("dambreak_column", 32, 6, &["--tracker", "front"]),
+        "frames/0002.ply",
+    );
 }
 
 #[test]
