@@ -5,6 +5,8 @@
 //! `{position: [..], value: [..]}`, contact angles are `{phase: degrees}`; `null` where the
 //! phase (or the triple point) is gone.
 
+use std::collections::BTreeMap;
+
 use anyhow::Result;
 use polyphase_coupling::{measure, Measured};
 use polyphase_scenes::{MeasureKind, Scene};
@@ -58,6 +60,18 @@ pub fn add_measurements(
         };
     }
     Ok(())
+}
+
+/// Adds `regions` (live regions of a tracker that counts them) and `events` {name: count over
+/// the frame} (its topology events: merge snaps, T1, T2), each only when there is one.
+pub fn add_topology(line: &mut Value, regions: Option<usize>, events: &[(&'static str, usize)]) {
+    if let Some(n) = regions {
+        line["regions"] = json!(n);
+    }
+    if !events.is_empty() {
+        let events: BTreeMap<&str, usize> = events.iter().copied().collect();
+        line["events"] = json!(events);
+    }
 }
 
 /// Adds `volume_correction` {phase: volume the correction added over the frame, relative to

@@ -15,7 +15,7 @@ use polyphase_tracker::{InterfaceTracker, StepStats};
 use serde_json::{json, Value};
 
 use crate::checkpoint::{Checkpoint, Totals};
-use crate::measurements::{add_measurements, add_volume_correction};
+use crate::measurements::{add_measurements, add_topology, add_volume_correction};
 use crate::output::RunFolder;
 use crate::run::{progress, Progress, Start};
 use crate::slab::{self, mid_plane, SlabFrame};
@@ -251,6 +251,7 @@ fn frame_line<T: InterfaceTracker>(
         "interface_cells": report.interface_cells,
         "interface_lag": report.interface_lag,
     });
+    add_topology(&mut line, tracker.region_count(), &report.events);
     if let Some(c) = report.capillary {
         line["capillary"] = json!({
             "dt_limit": c.dt_limit,

@@ -13,7 +13,7 @@ use polyphase_tracker::{metrics, InterfaceTracker, LabeledMesh, StepStats};
 use serde_json::{json, Value};
 
 use crate::checkpoint::{Checkpoint, Totals};
-use crate::measurements::{add_measurements, add_volume_correction};
+use crate::measurements::{add_measurements, add_topology, add_volume_correction};
 use crate::output::RunFolder;
 use crate::run::{progress, Progress, Start};
 use crate::slab::{self, SlabFrame};
@@ -219,13 +219,7 @@ fn frame_line(
         "cells": stats.cells,
         "interface_cells": stats.interface_cells,
     });
-    if let Some(n) = tracker.region_count() {
-        line["regions"] = json!(n);
-    }
-    if !stats.events.is_empty() {
-        let events: BTreeMap<&str, usize> = stats.events.iter().copied().collect();
-        line["events"] = json!(events);
-    }
+    add_topology(&mut line, tracker.region_count(), &stats.events);
     // Scene validation allows `rise_velocity` on coupled scenes only.
     add_measurements(&mut line, scene, mesh, &|_| Ok(Value::Null))?;
     add_volume_correction(

@@ -51,6 +51,9 @@ pub struct FrameReport {
     /// Per phase, the volume (m³) the tracker's volume correction added over the frame
     /// ([`StepStats::volume_correction`], summed).
     pub volume_correction: Vec<f64>,
+    /// The tracker's events ([`StepStats::events`]: merge snaps, T1, T2), summed over the
+    /// frame's tracker steps.
+    pub events: Vec<(&'static str, usize)>,
     /// With surface tension: the capillary time-step limit (s) and, summed over the steps,
     /// the interface faces that carried a tension and those where no interface of their pair
     /// was found near the crossing (no jump there).
@@ -398,6 +401,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         report.cells = tracked.cells;
         report.interface_cells = tracked.interface_cells;
         tracked.add_volume_correction_to(&mut report.volume_correction);
+        tracked.add_events_to(&mut report.events);
         report.tracker_steps += 1;
         Ok(())
     }

@@ -46,6 +46,10 @@ pub enum Interpolation {
     Trilinear,
     /// Tensor-product monotone cubic Hermite (Fritsch–Carlson limited): sharper, no new extrema.
     MonotoneCubic,
+    /// Catmull–Rom along each component's axis and its running sum's derivative across: no
+    /// divergence anywhere when the field has none per cell (interfaces moved in it keep
+    /// their volumes; see `div_free.rs`).
+    DivergenceFree,
 }
 
 /// Velocity self-advection scheme.

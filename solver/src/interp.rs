@@ -90,6 +90,7 @@ pub(crate) fn sample(
     match scheme {
         Interpolation::Trilinear => trilinear(spec, layout, data, a, x),
         Interpolation::MonotoneCubic => monotone_cubic(spec, layout, data, a, x),
+        Interpolation::DivergenceFree => crate::div_free::sample(spec, layout, data, a, x),
     }
 }
 

@@ -10,6 +10,7 @@
 mod advect;
 pub mod bench;
 mod config;
+mod div_free;
 mod error;
 mod extension;
 mod interp;

@@ -294,6 +294,13 @@ impl FrontTracker {
                 }
             })
             .collect();
+        let x1 = match self.params.midpoint_flux {
+            true => {
+                let extra = flux::flux_displacements(&self.c.mesh, velocity, x0, &x1, t, dt);
+                x1.iter().zip(extra).map(|(x, d)| *x + d).collect()
+            }
+            false => x1,
+        };
         self.finite(x0, x1, t, pinned)
     }
 
@@ -512,6 +519,7 @@ impl InterfaceTracker for FrontTracker {
 }
 
 mod detach;
+mod flux;
 mod snapshot;
 mod topology_step;
 mod untangle;

@@ -59,6 +59,10 @@ pub struct FrontParams {
     pub smoothing_passes: u32,
     /// Vertex trajectory integrator (default RK4).
     pub integrator: Integrator,
+    /// In a velocity field, vertices also move by the normal part of their triangles' flux
+    /// defect, so that each triangle sweeps the edge-midpoint rule's flux, exact for quadratic
+    /// velocities, instead of its corners' (default on; `front_tracker/flux.rs`).
+    pub midpoint_flux: bool,
     /// Greatest number of times a step's motion is halved when collision resolution fails
     /// before the unresolvable part of the motion is dropped (default 4).
     pub max_substep_depth: u32,
@@ -91,6 +95,7 @@ impl Default for FrontParams {
             butterfly: false,
             smoothing_passes: 1,
             integrator: Integrator::Rk4,
+            midpoint_flux: true,
             max_substep_depth: 4,
             merge_distance: None,
             min_region_volume: 0.125,

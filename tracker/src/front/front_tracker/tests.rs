@@ -191,3 +191,41 @@ fn a_contact_line_slides_along_a_wall_with_the_flow() {
         sum / n
     );
 }
+
+#[test]
+fn the_midpoint_flux_keeps_a_volume_that_the_corners_alone_lose() {
+    // A ball off the centre of the cellular flow, whose velocity curves across every triangle
+    // (speeds up to 1, sheared over the ball's radius).
+    let centre = DVec3::new(0.5, 0.35, 0.5);
+    let ball = move |x: DVec3| {
+        let r = (x - centre).length();
+        if r >= 0.2 {
+            (r - 0.2, 0)
+        } else {
+            (0.2 - r, 1)
+        }
+    };
+    let drift = |midpoint_flux| {
+        let params = FrontParams {
+            midpoint_flux,
+            ..FrontParams::default()
+        };
+        let mut tracker =
+            FrontTracker::from_sampler(unit_box_16(), &ball, 2, 0, params).expect("valid");
+        let start = tracker.phase_volumes()[1];
+        let dt = 1.0 / 64.0;
+        for s in 0..16 {
+            tracker
+                .advance(&Cells, s as f64 * dt, dt)
+                .expect("finite flow");
+        }
+        (tracker.phase_volumes()[1] - start) / start
+    };
+    let (corners, midpoints) = (drift(false), drift(true));
+    // Measured −8.7e-5 by the corners and −2.1e-6 with the midpoint flux (the rest is
+    // remeshing and RK4): at least 5× less.
+    assert!(
+        midpoints.abs() < 0.2 * corners.abs(),
+        "{midpoints:.2e} against {corners:.2e}"
+    );
+}
