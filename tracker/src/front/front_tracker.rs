@@ -242,7 +242,7 @@ impl FrontTracker {
                 }
             }
             let merged = if flow.merges() {
-                self.merge(MERGE_DISTANCE)
+                self.merge(MERGE_DISTANCE, None)
             } else {
                 TopologyCounts::default()
             };
@@ -451,7 +451,7 @@ impl InterfaceTracker for FrontTracker {
             moved?;
         } else {
             self.move_safely(Motion::Field(velocity), t, dt, 0)?;
-            let merged = self.merge(0.0);
+            let merged = self.merge(0.0, Some(self.background));
             self.report.remesh = improve(&mut self.c, &self.params, self.target, true);
             let separated = self.separate(T1Rule::Field(velocity, t + dt));
             self.report.topology = merged.plus(&separated);

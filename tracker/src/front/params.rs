@@ -69,9 +69,11 @@ pub struct FrontParams {
     /// Surfaces closer than `merge_distance * L` are snapped together (paper 000 §6.2, whose
     /// threshold is the user's): liquids that meet merge, different ones get an interface; 0
     /// turns merging off. Default: 0.3 for mesh-driven flows that bring surfaces together
-    /// (normal flows, curl noise), off for prescribed velocity fields, whose passive tests
+    /// (normal flows, curl noise), off in velocity fields, passive and coupled: passive tests
     /// measure the tracker without it (merging took 0.4 s of 0.55 s per frame of `enright`
-    /// at 24³; set it to merge there too).
+    /// at 24³), and in coupled runs the T2 removal of the air pockets merging traps took
+    /// minutes per frame (`balls` at 64). Set it to merge there too; in a velocity field only
+    /// films of the background phase close.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub merge_distance: Option<f64>,
     /// Regions smaller than `min_region_volume * L³` are removed, their space given to their

@@ -7,7 +7,7 @@
 use std::time::Instant;
 
 use glam::DVec3;
-use polyphase_grid::VelocityField;
+use polyphase_grid::{PhaseId, VelocityField};
 
 use super::FrontTracker;
 use crate::front::flow::MeshFlow;
@@ -58,15 +58,16 @@ impl TopologyCounts {
 
 impl FrontTracker {
     /// Snaps together surfaces within the merge distance (§6.2); the first topology stage,
-    /// right after the motion. `default` is the distance (in L) when the scene sets none.
-    pub(super) fn merge(&mut self, default: f64) -> TopologyCounts {
+    /// right after the motion. `default` is the distance (in L) when the scene sets none;
+    /// `across` the only phase a closing gap may hold ([`merge_pass`]).
+    pub(super) fn merge(&mut self, default: f64, across: Option<PhaseId>) -> TopologyCounts {
         let fraction = self.params.merge_distance.unwrap_or(default);
         if fraction <= 0.0 {
             return TopologyCounts::default();
         }
         let start = Instant::now();
         let distance = fraction * self.target;
-        let stats = merge_pass(&mut self.c, &self.params, self.target, distance);
+        let stats = merge_pass(&mut self.c, &self.params, self.target, distance, across);
         self.seconds[2] += start.elapsed().as_secs_f64();
         TopologyCounts {
             snaps: stats.snaps,

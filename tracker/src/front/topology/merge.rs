@@ -18,6 +18,7 @@ mod subdivide;
 mod tests;
 
 use glam::DVec3;
+use polyphase_grid::PhaseId;
 
 use self::proximity::{Pair, Prim};
 use super::degenerate::remove_degenerate_pairs;
@@ -51,13 +52,21 @@ const MAX_PASSES: usize = 8;
 /// moves its two vertices by at most `distance / 2`, which changes a phase's volume by at most
 /// a third of the area of their triangles times that (the gap being closed); splits and the
 /// removal of coincident pairs move nothing.
+///
+/// `across`: the only phase a closing gap may hold (`None`: any). In a fluid the films that
+/// close are the air's, when two liquids or a liquid and a wall meet; the two faces of a
+/// liquid sheet thinner than the merge distance are not a gap, and snapping them deletes the
+/// sheet (measured with merging on: `balls` at 64 lost 4.8 % of its water by t = 0.37 s, and
+/// 0.10 % with this rule).
 pub fn merge_pass(
     c: &mut Connectivity,
     params: &FrontParams,
     target: f64,
     distance: f64,
+    across: Option<PhaseId>,
 ) -> MergeStats {
     let mut m = Merger::new(c, params, target, distance);
+    m.across = across;
     m.run();
     let stats = m.stats;
     c.compact();
@@ -76,6 +85,8 @@ pub(crate) struct Merger<'a> {
     /// refinement). Half the collapse length: a closer split would make an edge that the next
     /// collapse pass removes again.
     near: f64,
+    /// The only phase a closing gap may hold ([`merge_pass`]); `None`: any.
+    pub(crate) across: Option<PhaseId>,
     /// What the merge did so far.
     pub(crate) stats: MergeStats,
     /// Runs the invariant and intersection checks after every operation (tests).
@@ -95,6 +106,7 @@ impl<'a> Merger<'a> {
             r: Remesher::new(c, Bounds::new(params, target)),
             distance,
             near: 0.5 * params.min_edge * target,
+            across: None,
             stats: MergeStats::default(),
             #[cfg(test)]
             verify: false,
@@ -129,6 +141,7 @@ impl<'a> Merger<'a> {
         if pa.distance(pb) > self.distance
             || !self.fold_allows(&pair.a, &pair.b)
             || !self.facing(&pair.a, &pair.b, pa, pb)
+            || !self.gap_allowed(&pair.a, &pair.b, pa, pb)
         {
             return false;
         }

@@ -210,6 +210,30 @@ impl Merger<'_> {
         faces(a) && faces(b)
     }
 
+    /// Does the gap between `pa` (on `a`) and `pb` (on `b`) hold only the phase
+    /// [`Merger::across`] allows? Each side's phase toward the other is read off its holding
+    /// triangles that face the gap (within the 30° of [`Merger::facing`]): the label on the
+    /// side the gap direction points to. Touching points have no gap to read and pass.
+    pub(crate) fn gap_allowed(&self, a: &Prim, b: &Prim, pa: DVec3, pb: DVec3) -> bool {
+        let Some(phase) = self.across else {
+            return true;
+        };
+        let gap = pb - pa;
+        if gap.length() <= 1e-9 * self.distance {
+            return true;
+        }
+        let d = gap.normalize();
+        let toward = |p: &Prim, d: DVec3| {
+            self.holders(p).into_iter().all(|t| {
+                let [x, y, z] = self.r.c.triangle(t).map(|v| self.position(v));
+                let along = (y - x).cross(z - x).normalize_or_zero().dot(d);
+                let [front, back] = self.r.c.labels(t);
+                along.abs() < FACING || phase == if along > 0.0 { front } else { back }
+            })
+        };
+        toward(a, d) && toward(b, -d)
+    }
+
     /// Live triangles containing every vertex of `p`.
     fn holders(&self, p: &Prim) -> Vec<u32> {
         let c = &*self.r.c;

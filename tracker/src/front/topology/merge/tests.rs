@@ -1,6 +1,6 @@
 //! Snap-based merging on fixture meshes: spheres of two phases meet in a separating interface,
-//! spheres of one phase fuse into one body, a snap that would collide is cancelled, and a
-//! surface does not snap within its own plane.
+//! spheres of one phase fuse into one body, a gap closes only across the phase allowed in it,
+//! a snap that would collide is cancelled, and a surface does not snap within its own plane.
 
 use glam::{DQuat, DVec3};
 use polyphase_grid::PhaseId;
@@ -228,6 +228,22 @@ fn spheres_of_one_phase_fuse_into_one_body() {
     }
 }
 
+#[test]
+fn a_gap_closes_only_across_the_phase_allowed_in_it() {
+    // Two bodies of phase 1 with phase 0 between them: as a gap of phase 0 they fuse; read as
+    // if it were a sheet of phase 1 (a liquid's own thickness, which merging must not close)
+    // nothing snaps.
+    let (gap, distance) = (0.004, 0.015);
+    let run = |across| {
+        let mesh = spheres(gap, 3, 0.0, 1);
+        let target = mesh.mean_edge_length();
+        let mut c = Connectivity::new(mesh);
+        merge_pass(&mut c, &FrontParams::default(), target, distance, across)
+    };
+    assert!(run(Some(0)).snaps > 0);
+    assert_eq!(run(Some(1)), MergeStats::default());
+}
+
 /// Index of the vertex of `mesh` at `p` (to rounding).
 fn vertex_at(mesh: &LabeledMesh, p: DVec3) -> u32 {
     mesh.vertices
@@ -368,7 +384,7 @@ fn merge_pass_is_deterministic_and_compacts() {
             .expect("a thread pool");
         pool.install(|| {
             let mut c = Connectivity::new(mesh.clone());
-            let stats = merge_pass(&mut c, &FrontParams::default(), target, 0.03);
+            let stats = merge_pass(&mut c, &FrontParams::default(), target, 0.03, None);
             (c.mesh, stats)
         })
     };
