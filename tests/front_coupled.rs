@@ -1,7 +1,7 @@
 //! The front tracker driving the fluid (issue 12): `dambreak_column` at low resolution, the
 //! mesh checked every 5 ms (closed, label-consistent, intersection-free), its water's volume
 //! held without any correction, and its surge front beside the contouring tracker's under the
-//! same solver.
+//! same solver; and falling balls of five liquids, one landed, keep their volumes.
 
 mod common;
 
@@ -84,5 +84,32 @@ fn the_front_tracker_carries_a_collapsing_column_like_the_contouring_tracker() {
             "frame {}: front {f} against contouring {c}",
             k + 1
         );
+    }
+}
+
+#[test]
+fn falling_balls_and_a_landed_one_keep_their_volumes_without_correction() {
+    // `balls` at 48 tracker cells (solver 24) to t = 0.3 s: four balls fall, the lowest has
+    // landed and spread into a sheet on the floor, and no two liquids touch yet.
+    let scene = builtin_at("balls", 48)
+        .with_tracker(TrackerKind::Front)
+        .expect("valid override");
+    let (mut sim, _) = from_scene(&scene).expect("coupled scene");
+    let start = sim.tracker().phase_volumes();
+    let liquids = 1..start.len();
+    assert!(scene.phase_names()[0] == "air" && liquids.len() == 5);
+    for frame in 1..=10 {
+        sim.advance_to(0.03 * frame as f64).expect("frame");
+        let mesh = sim.tracker().mesh();
+        invariants::check(mesh, 0.0).unwrap_or_else(|e| panic!("frame {frame}: {e}"));
+        assert!(self_intersections(mesh).is_empty(), "frame {frame}");
+        for p in liquids.clone() {
+            // The velocity is divergence-free at every point and each triangle sweeps the
+            // edge-midpoint rule's flux, so only RK4's and remeshing's errors are left
+            // (measured: within 0.011 %). By the corners' flux alone the water gained
+            // 0.115 % (0.74 % at 64 cells with trilinear sampling as well).
+            let drift = sim.tracker().phase_volumes()[p] / start[p] - 1.0;
+            assert!(drift.abs() < 3e-4, "frame {frame}, phase {p}: {drift:+.2e}");
+        }
     }
 }
