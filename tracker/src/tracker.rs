@@ -26,8 +26,6 @@ pub struct StepStats {
 }
 
 impl StepStats {
-    /// Adds this step's per-phase volume correction into `total`, grown as needed: a frame's
-    /// sum over its steps.
     /// Adds this step's event counts into `total` (a frame's sum over its steps).
     pub fn add_events_to(&self, total: &mut Vec<(&'static str, usize)>) {
         for &(name, n) in &self.events {
@@ -38,6 +36,8 @@ impl StepStats {
         }
     }
 
+    /// Adds this step's per-phase volume correction into `total`, grown as needed: a frame's
+    /// sum over its steps.
     pub fn add_volume_correction_to(&self, total: &mut Vec<f64>) {
         if total.len() < self.volume_correction.len() {
             total.resize(self.volume_correction.len(), 0.0);

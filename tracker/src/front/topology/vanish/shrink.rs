@@ -16,15 +16,14 @@ use crate::front::remesh::Remesher;
 use crate::front::topology::degenerate::{coincident_groups, remove_degenerate_pairs};
 use crate::front::topology::regions::regions;
 
-/// Collapses one region may take. A region below the T2 volume (a fraction of L³) has a few
-/// dozen edges at most, and every collapse removes one of its vertices.
-const MAX_COLLAPSES: usize = 256;
-
 /// Shrinks `region` (one of `all`, the regions of `c`; smaller than `min_volume`) by collapses
 /// of its edges until the region count drops by exactly one, and returns the regions then.
 /// `None` when a step finds no collapse that passes, leaves coincident triangles that do not
 /// resolve, makes another region smaller than `min_volume`, or changes the count otherwise (a
 /// split or a second region lost); `c` is then partly changed and the caller restores it.
+/// Every collapse joins two of the region's vertices, and a closed region with fewer than four
+/// vertices is degenerate, so a region of n vertices that has not vanished after n collapses
+/// never will: that bounds the attempt.
 pub(super) fn shrink(
     c: &mut Connectivity,
     params: &FrontParams,
@@ -37,7 +36,7 @@ pub(super) fn shrink(
     let small_before = all.iter().filter(|r| r.volume < min_volume).count();
     let phase = region.phase;
     let mut triangles = region.triangles.clone();
-    for _ in 0..MAX_COLLAPSES {
+    for _ in 0..vertices_of(c, &triangles).len() {
         let keep = collapse_shortest(c, params, target, &triangles)?;
         remove_degenerate_pairs(c);
         if coincident_groups(c).next().is_some() {
@@ -116,9 +115,12 @@ fn vertices_of(c: &Connectivity, triangles: &[u32]) -> Vec<u32> {
     v
 }
 
-/// The region of `phase` among `all` that the shrinking one became: the one with a triangle
-/// on `keep` (the vertex the last collapse kept), else the first with a triangle on one of
-/// `vertices` (the shrinking region's, when its triangles at `keep` went as coincident pairs).
+/// The region of `phase` among `all` that the shrinking one became: the smallest with a
+/// triangle on `keep` (the vertex the last collapse kept), else the smallest with a triangle
+/// on one of `vertices` (the shrinking region's, when its triangles at `keep` went as
+/// coincident pairs). The smallest, because the shrinking region's vertices sit on junctions
+/// that a large region of the same phase may touch too (an air pocket beside the air around
+/// it); ties go to the lower first triangle, so the choice is deterministic.
 fn region_at<'a>(
     c: &Connectivity,
     all: &'a [Region],
@@ -132,8 +134,70 @@ fn region_at<'a>(
                 .iter()
                 .any(|&t| c.triangle(t).iter().any(|&v| hit(v)))
     };
-    all.iter().find(|r| touches(r, &|v| v == keep)).or_else(|| {
-        all.iter()
-            .find(|r| touches(r, &|v| vertices.binary_search(&v).is_ok()))
-    })
+    let smallest = |hit: &dyn Fn(u32) -> bool| {
+        all.iter().filter(|r| touches(r, hit)).min_by(|x, y| {
+            x.volume
+                .total_cmp(&y.volume)
+                .then(x.triangles.first().cmp(&y.triangles.first()))
+        })
+    };
+    smallest(&|v| v == keep).or_else(|| smallest(&|v| vertices.binary_search(&v).is_ok()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::front::intersection::self_intersections;
+    use crate::front::topology::clean;
+    use crate::mesh::fixtures::lattice_mesh;
+
+    #[test]
+    fn pocket_touching_the_background_of_its_phase_shrinks_alone() {
+        // 4³ box: phase 1 below z = 1/2 with a bump, cell (1, 1, 2), and a pocket of phase 0,
+        // cell (1, 1, 1), under the bump. The pocket's top edges are non-manifold: there it
+        // touches the air cells diagonally above, so its vertices are also the background
+        // region's, a region of the same phase ~30 times larger: `region_at` must follow the
+        // pocket, not the background, for the count to drop by exactly one.
+        let mesh = lattice_mesh(4, |i, j, k| match (i, j, k) {
+            (1, 1, 1) => 0,
+            (1, 1, 2) => 1,
+            (_, _, k) => PhaseId::from(k < 2),
+        });
+        let mut c = Connectivity::new(mesh);
+        let all = regions(&c);
+        let pocket = all
+            .iter()
+            .find(|r| r.phase == 0 && r.volume < 0.1)
+            .expect("the pocket is a region")
+            .clone();
+        let background = |all: &[Region]| {
+            all.iter()
+                .filter(|r| r.phase == 0)
+                .map(|r| r.volume)
+                .fold(0.0, f64::max)
+        };
+        let air = background(&all);
+        // (L/2)³ = 0.064 for L = 0.8: the pocket (1/64) is small, the background (~0.48) not.
+        let min_volume = 0.4f64.powi(3);
+        let after = shrink(
+            &mut c,
+            &FrontParams::default(),
+            0.8,
+            &pocket,
+            &all,
+            min_volume,
+        )
+        .expect("the pocket shrinks away");
+        assert_eq!(after.len() + 1, all.len());
+        let mesh = clean(&c);
+        crate::invariants::check(&mesh, 0.0).expect("closed and label-consistent");
+        assert!(self_intersections(&mesh).is_empty());
+        // Its space went to its neighbours; the background lost no more than the pocket
+        // held (collapses on its edges keep its volume to first order, Remesher).
+        assert!(
+            (background(&after) - air).abs() < pocket.volume,
+            "{air} -> {}",
+            background(&after)
+        );
+    }
 }
