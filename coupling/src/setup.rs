@@ -83,6 +83,7 @@ pub fn build_tracker(
             if let Some(flow) = &scene.mesh_flow {
                 tracker.set_flow(flow.clone());
             }
+            tracker.set_volume_correction(scene.file.volume_correction);
             let first = match restoring {
                 true => StepStats::default(),
                 false => StepStats {

@@ -101,9 +101,9 @@ pub struct FrontTracker {
     domain: Option<(DVec3, DVec3)>,
     query: OnceLock<MeshQuery>,
     report: FrontStepReport,
-    /// Seconds spent this step integrating trajectories, resolving collisions, merging and
-    /// in T1/T2 processes.
-    seconds: [f64; 4],
+    /// Seconds spent this step integrating trajectories, resolving collisions, merging, in
+    /// T1/T2 processes and giving volume back ([`FrontTracker::set_volume_correction`]).
+    seconds: [f64; 5],
     /// Volume enclosed by domain boundary faces taken off the starting mesh
     /// ([`detach::detach_box`]); it belongs to the background phase.
     detached_volume: f64,
@@ -111,6 +111,9 @@ pub struct FrontTracker {
     flow: Option<MeshFlow>,
     /// Substeps of the flow taken so far (the alternating flow counts them).
     flow_steps: u64,
+    /// Whether each step in a velocity field gives every phase but the background back the
+    /// volume its mesh operations changed (`give_back.rs`).
+    gives_back: bool,
 }
 
 impl FrontTracker {
@@ -148,10 +151,11 @@ impl FrontTracker {
             domain,
             query: OnceLock::new(),
             report: FrontStepReport::default(),
-            seconds: [0.0; 4],
+            seconds: [0.0; 5],
             detached_volume: 0.0,
             flow: None,
             flow_steps: 0,
+            gives_back: false,
         };
         // A contoured mesh is far from the target sizing: remesh until the bulk of the work is
         // done, so that the first steps do not carry it (at most 4 passes).
@@ -202,6 +206,13 @@ impl FrontTracker {
     /// Counts of the last step (or of the initial remeshing before the first step).
     pub fn last_report(&self) -> FrontStepReport {
         self.report
+    }
+
+    /// Switches on (or off, the default) the per-step give-back of the volume that merging,
+    /// remeshing and the T1/T2 processes change in a velocity field (`give_back.rs`); stats
+    /// report the amount as the step's volume correction.
+    pub fn set_volume_correction(&mut self, on: bool) {
+        self.gives_back = on;
     }
 
     /// Moves the mesh by `flow` from now on: `advance` then ignores its velocity field and
@@ -443,18 +454,23 @@ impl InterfaceTracker for FrontTracker {
         dt: f64,
     ) -> Result<StepStats, TrackerError> {
         self.report = FrontStepReport::default();
-        self.seconds = [0.0; 4];
+        self.seconds = [0.0; 5];
         let t1 = Instant::now();
+        let mut volume_correction = Vec::new();
         if let Some(flow) = self.flow.take() {
             let moved = self.advance_flow(&flow, t, dt);
             self.flow = Some(flow);
             moved?;
         } else {
             self.move_safely(Motion::Field(velocity), t, dt, 0)?;
+            let moved = self.c.mesh.phase_volumes(self.n_phases);
             let merged = self.merge(0.0, Some(self.background));
             self.report.remesh = improve(&mut self.c, &self.params, self.target, true);
             let separated = self.separate(T1Rule::Field(velocity, t + dt));
             self.report.topology = merged.plus(&separated);
+            if self.gives_back {
+                volume_correction = self.give_back(&moved, t + dt)?;
+            }
         }
         let remesh = t1.elapsed().as_secs_f64() - self.seconds.iter().sum::<f64>();
         self.query = OnceLock::new();
@@ -465,6 +481,7 @@ impl InterfaceTracker for FrontTracker {
                 ("merge", self.seconds[2]),
                 ("remesh", remesh),
                 ("topology", self.seconds[3]),
+                ("give_back", self.seconds[4]),
             ],
             events: vec![
                 ("flow_substeps", self.report.flow_substeps),
@@ -474,6 +491,7 @@ impl InterfaceTracker for FrontTracker {
                 ("t2_degenerate", self.report.topology.degenerate),
                 ("t2_regions", self.report.topology.vanished),
             ],
+            volume_correction,
             ..StepStats::default()
         })
     }
@@ -504,7 +522,8 @@ impl InterfaceTracker for FrontTracker {
         Some(regions(&self.c).len().max(1))
     }
 
-    /// The mesh has no volume correction: every vertex goes where the velocity takes it.
+    /// No correction of the motion: every vertex goes where the velocity takes it (the
+    /// give-back corrects only what mesh operations change).
     fn needs_solenoidal_velocity(&self) -> bool {
         true
     }
@@ -520,6 +539,7 @@ impl InterfaceTracker for FrontTracker {
 
 mod detach;
 mod flux;
+mod give_back;
 mod snapshot;
 mod topology_step;
 mod untangle;

@@ -44,8 +44,8 @@ impl FrontTracker {
     }
 
     /// Continues from `state` with the scene's phases and parameters, exactly as the tracker
-    /// that gave it would have; the scene's mesh-driven flow is set again with
-    /// [`FrontTracker::set_flow`]. Unlike [`FrontTracker::new`] it does not remesh.
+    /// that gave it would have; the scene's mesh-driven flow and volume correction are set
+    /// again with [`FrontTracker::set_flow`] and [`FrontTracker::set_volume_correction`]. Unlike [`FrontTracker::new`] it does not remesh.
     pub fn from_state(
         state: FrontState,
         n_phases: usize,
@@ -70,10 +70,11 @@ impl FrontTracker {
             domain: state.domain,
             query: OnceLock::new(),
             report: state.report,
-            seconds: [0.0; 4],
+            seconds: [0.0; 5],
             detached_volume: state.detached_volume,
             flow: None,
             flow_steps: state.flow_steps,
+            gives_back: false,
         })
     }
 }
