@@ -23,7 +23,8 @@ pub struct SceneFile {
     /// Whether each tracker step gives every phase back its exact initial volume by a small
     /// offset of the interfaces (`polyphase_tracker::volume_correction`; not in paper 004).
     /// The front tracker gives back only what its mesh operations changed in a velocity field
-    /// (merging, remeshing, T1/T2; `front_tracker/give_back.rs`), not the motion's error.
+    /// (merging, remeshing, T1/T2; `front_tracker/give_back.rs`) in steps that change the
+    /// topology, not the motion's error.
     #[serde(default = "default_true")]
     pub volume_correction: bool,
     /// Tracker cells along the longest domain axis.
