@@ -175,6 +175,17 @@ impl<'a> Remesher<'a> {
         }
     }
 
+    /// Drops the triangles that died outside the remesher's own operations (coincident pairs
+    /// removed by [`crate::front::topology::degenerate::remove_degenerate_pairs`]) from the
+    /// broad phase.
+    pub(crate) fn forget_dead(&mut self) {
+        for t in 0..self.c.mesh.triangles.len() as u32 {
+            if !self.c.is_live(t) {
+                self.grid.remove(t);
+            }
+        }
+    }
+
     pub(crate) fn tri(&self, t: u32) -> Tri {
         let [a, b, c] = self.c.triangle(t);
         Tri {

@@ -181,11 +181,7 @@ impl<'a> Merger<'a> {
     /// met face to face), and drops the removed triangles from the broad phase.
     fn remove_degenerate(&mut self) {
         self.stats.degenerate += remove_degenerate_pairs(self.r.c);
-        for t in 0..self.r.c.mesh.triangles.len() as u32 {
-            if !self.r.c.is_live(t) {
-                self.r.grid.remove(t);
-            }
-        }
+        self.r.forget_dead();
         self.verify_now("degenerate removal");
     }
 

@@ -36,9 +36,17 @@ pub(super) fn shrink(
     let small_before = all.iter().filter(|r| r.volume < min_volume).count();
     let phase = region.phase;
     let mut triangles = region.triangles.clone();
-    for _ in 0..vertices_of(c, &triangles).len() {
-        let keep = collapse_shortest(c, params, target, &triangles)?;
-        remove_degenerate_pairs(c);
+    let steps = vertices_of(c, &triangles).len();
+    // One remesher (and broad phase) for the whole attempt, not one per collapse (`balls` at
+    // 64 with merging, frame 9, 210 regions removed: T2 25.6 -> 21.6 s, the same frame).
+    let mut r = Remesher::new(c, Bounds::new(params, target));
+    r.failsafe = true;
+    r.coincident = true;
+    for _ in 0..steps {
+        let keep = collapse_shortest(&mut r, &triangles)?;
+        remove_degenerate_pairs(r.c);
+        r.forget_dead();
+        let c = &*r.c;
         if coincident_groups(c).next().is_some() {
             return None;
         }
@@ -63,12 +71,8 @@ pub(super) fn shrink(
 
 /// Collapses the shortest edge of `triangles` that passes the checks of the module doc and
 /// moves no vertex of a domain wall off its place; returns the vertex kept.
-fn collapse_shortest(
-    c: &mut Connectivity,
-    params: &FrontParams,
-    target: f64,
-    triangles: &[u32],
-) -> Option<u32> {
+fn collapse_shortest(r: &mut Remesher, triangles: &[u32]) -> Option<u32> {
+    let c = &*r.c;
     let mut edges: Vec<[u32; 2]> = triangles
         .iter()
         .flat_map(|&t| {
@@ -83,9 +87,6 @@ fn collapse_shortest(
     let mut by_length: Vec<(f64, [u32; 2])> =
         edges.into_iter().map(|e| (length(c, e), e)).collect();
     by_length.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    let mut r = Remesher::new(c, Bounds::new(params, target));
-    r.failsafe = true;
-    r.coincident = true;
     for (_, [a, b]) in by_length {
         let Some((keep, _, p)) = r.collapse_target(a, b) else {
             continue;
