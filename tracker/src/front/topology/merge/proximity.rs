@@ -65,20 +65,29 @@ impl Merger<'_> {
             let (lo, hi) = crate::front::remesh::tri_box(c, t);
             self.r.grid.query(lo - d, hi + d, &mut near);
             for &s in near.iter().filter(|&&s| s > t && c.is_live(s)) {
+                // The grid reports whole cells: triangles whose boxes are farther apart than
+                // the distance hold no pair.
+                let (slo, shi) = crate::front::remesh::tri_box(c, s);
+                if (slo - hi).max(lo - shi).max_element() > self.distance * (1.0 + 1e-9) {
+                    continue;
+                }
                 let sv = c.triangle(s);
-                let mut candidates = Vec::with_capacity(24);
+                let mut candidates = [(Prim::Vertex(0), Prim::Vertex(0)); 24];
+                let mut k = 0;
                 for (p, q, qv) in [(tv, s, sv), (sv, t, tv)] {
                     for v in p {
-                        candidates.push((Prim::Vertex(v), Prim::Triangle(q, qv)));
+                        candidates[k] = (Prim::Vertex(v), Prim::Triangle(q, qv));
+                        k += 1;
                     }
                 }
                 for i in 0..3 {
                     let e = edge(tv[i], tv[(i + 1) % 3]);
                     for j in 0..3 {
                         let f = edge(sv[j], sv[(j + 1) % 3]);
-                        candidates.push((Prim::Edge(e.min(f)), Prim::Edge(e.max(f))));
                         let (u, w) = (tv[i].min(sv[j]), tv[i].max(sv[j]));
-                        candidates.push((Prim::Vertex(u), Prim::Vertex(w)));
+                        candidates[k] = (Prim::Edge(e.min(f)), Prim::Edge(e.max(f)));
+                        candidates[k + 1] = (Prim::Vertex(u), Prim::Vertex(w));
+                        k += 2;
                     }
                 }
                 for (a, b) in candidates {
