@@ -13,12 +13,12 @@ use glam::DVec3;
 use polyphase_grid::PhaseId;
 
 use super::{FrontTracker, Motion};
+use crate::tracker::TrackerError;
 
 /// Most offset passes of one give-back.
 const PASSES: usize = 3;
 /// Share of a phase's change that a give-back may leave: the passes stop below it.
 const LEFT: f64 = 0.01;
-use crate::tracker::TrackerError;
 
 impl FrontTracker {
     /// Moves the free surfaces of every phase but the background along their normals so that
