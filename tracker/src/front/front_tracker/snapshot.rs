@@ -45,7 +45,8 @@ impl FrontTracker {
 
     /// Continues from `state` with the scene's phases and parameters, exactly as the tracker
     /// that gave it would have; the scene's mesh-driven flow and volume correction are set
-    /// again with [`FrontTracker::set_flow`] and [`FrontTracker::set_volume_correction`]. Unlike [`FrontTracker::new`] it does not remesh.
+    /// again with [`FrontTracker::set_flow`] and [`FrontTracker::set_volume_correction`].
+    /// Unlike [`FrontTracker::new`] it does not remesh.
     pub fn from_state(
         state: FrontState,
         n_phases: usize,
