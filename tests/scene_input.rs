@@ -217,6 +217,18 @@ fn bad_scene_input_fails_with_one_line_and_writes_nothing() {
         None,
         &["measure[0].kind", "needs a coupled scene"],
     );
+    let reversed = fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/builtin/merge2_reverse.toml"),
+    )
+    .unwrap()
+    .replace("reverse_at = 0.3", "reverse_at = nan");
+    assert_refused(
+        &dir,
+        "reverse_at",
+        &reversed,
+        None,
+        &["velocity.reverse_at", "must be a finite number"],
+    );
     // The octahedron without its last face: three edges with one face each.
     let open = octahedron([0.5; 3], 0.3).replace("f 1 4 6\n", "");
     assert_refused(

@@ -41,6 +41,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("pool", include_str!("../builtin/pool.toml")),
     ("viscous", include_str!("../builtin/viscous.toml")),
     ("merge2", include_str!("../builtin/merge2.toml")),
+    (
+        "merge2_reverse",
+        include_str!("../builtin/merge2_reverse.toml"),
+    ),
     ("merge_same", include_str!("../builtin/merge_same.toml")),
     ("spheres25", include_str!("../builtin/spheres25.toml")),
     ("cyclic", include_str!("../builtin/cyclic.toml")),

@@ -260,8 +260,13 @@ pub enum VelocitySpec {
     /// The velocity of the MAC-grid fluid solver, coupled to the tracker (paper 004 §7.5).
     Fluid,
     /// Constant-speed normal flow per pair of phases with area-weighted vertex normals
-    /// (paper 000 §8.2–8.3); front tracker only.
-    Normal { speeds: Vec<PairSpeedSpec> },
+    /// (paper 000 §8.2–8.3); front tracker only. From `reverse_at` seconds on (if given) every
+    /// speed changes sign.
+    Normal {
+        speeds: Vec<PairSpeedSpec>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        reverse_at: Option<f64>,
+    },
     /// The same flow by face offsetting (Jiao 2007; paper 000 §8.2's cyclic flow); front
     /// tracker only.
     NormalFom { speeds: Vec<PairSpeedSpec> },

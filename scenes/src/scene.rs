@@ -507,7 +507,15 @@ fn compile_mesh_flow(
             .collect()
     };
     Ok(Some(match v {
-        VelocitySpec::Normal { speeds: s } => MeshFlow::Normal(speeds(s)?),
+        VelocitySpec::Normal {
+            speeds: s,
+            reverse_at,
+        } => MeshFlow::Normal {
+            speeds: speeds(s)?,
+            reverse_at: reverse_at
+                .map(|at| finite(at, "velocity.reverse_at", bad))
+                .transpose()?,
+        },
         VelocitySpec::NormalFom { speeds: s } => MeshFlow::NormalOffset(speeds(s)?),
         VelocitySpec::MeanCurvature { rate } => MeshFlow::MeanCurvature {
             rate: positive(*rate, "velocity.rate", bad)?,

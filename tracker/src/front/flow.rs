@@ -28,8 +28,13 @@ pub struct PairSpeed {
 /// A motion of the mesh computed from the mesh.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MeshFlow {
-    /// Constant-speed normal flow with area-weighted vertex normals (§8.1, §8.3).
-    Normal(Vec<PairSpeed>),
+    /// Constant-speed normal flow with area-weighted vertex normals (§8.1, §8.3); from
+    /// `reverse_at` on (if given) every speed changes sign, as in paper 000 §8.2's reversed
+    /// Fig. 15, where the merged spheres shrink until they vanish.
+    Normal {
+        speeds: Vec<PairSpeed>,
+        reverse_at: Option<f64>,
+    },
     /// Constant-speed normal flow by face offsetting (Jiao 2007), as paper 000 §8.2 uses for
     /// the cyclic case: each vertex moves so that its faces move by their own offsets.
     NormalOffset(Vec<PairSpeed>),
@@ -54,11 +59,25 @@ pub enum FlowStep<'a> {
 }
 
 impl MeshFlow {
-    /// The motion of substep number `step`, of length `h`, of the mesh in `c`; `fixed[v][k]`
-    /// marks coordinates held by a domain wall (the implicit flow needs them in its solve).
-    pub fn step(&self, c: &Connectivity, step: u64, h: f64, fixed: &[[bool; 3]]) -> FlowStep<'_> {
+    /// The motion of substep number `step`, from time `t` for `h`, of the mesh in `c`;
+    /// `fixed[v][k]` marks coordinates held by a domain wall (the implicit flow needs them in
+    /// its solve).
+    pub fn step(
+        &self,
+        c: &Connectivity,
+        step: u64,
+        t: f64,
+        h: f64,
+        fixed: &[[bool; 3]],
+    ) -> FlowStep<'_> {
         match self {
-            MeshFlow::Normal(speeds) => FlowStep::Vertices(normal::velocities(c, speeds)),
+            MeshFlow::Normal { speeds, reverse_at } => {
+                let sign = match reverse_at {
+                    Some(at) if reached(*at, t) => -1.0,
+                    _ => 1.0,
+                };
+                FlowStep::Vertices(normal::velocities(c, speeds, sign))
+            }
             MeshFlow::NormalOffset(speeds) => FlowStep::Vertices(offset::velocities(c, speeds)),
             MeshFlow::MeanCurvature { rate } => {
                 FlowStep::Vertices(curvature::implicit_velocities(c, *rate, h, fixed))
@@ -67,9 +86,20 @@ impl MeshFlow {
                 if step.is_multiple_of(2) {
                     FlowStep::Field(noise)
                 } else {
-                    FlowStep::Vertices(normal::velocities(c, speeds))
+                    FlowStep::Vertices(normal::velocities(c, speeds, 1.0))
                 }
             }
+        }
+    }
+
+    /// The time after `t` at which the flow changes (a reversal), so that no substep spans it.
+    pub fn change_after(&self, t: f64) -> Option<f64> {
+        match self {
+            MeshFlow::Normal {
+                reverse_at: Some(at),
+                ..
+            } if !reached(*at, t) => Some(*at),
+            _ => None,
         }
     }
 
@@ -102,6 +132,12 @@ impl MeshFlow {
             _ => None,
         }
     }
+}
+
+/// Whether time `t` has reached `at`, up to the rounding of summed substeps (a billionth of
+/// `at`), so that a substep ending at `at` is not followed by a vanishing one before it.
+fn reached(at: f64, t: f64) -> bool {
+    t >= at - 1e-9 * at.abs().max(1.0)
 }
 
 /// The interface triangles around vertex `v` (domain walls, `OUTSIDE` faces, left out) as

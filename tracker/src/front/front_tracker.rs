@@ -230,8 +230,12 @@ impl FrontTracker {
             let fixed = self.fixed_coordinates(false);
             // The travel limit: at most `cfl` target lengths per substep. The implicit flow's
             // velocities depend on the substep, so it is chosen again until it fits.
+            let now = t + done;
             let mut h = dt - done;
-            let mut step = flow.step(&self.c, self.flow_steps, h, &fixed);
+            if let Some(change) = flow.change_after(now) {
+                h = h.min(change - now);
+            }
+            let mut step = flow.step(&self.c, self.flow_steps, now, h, &fixed);
             for _ in 0..8 {
                 let speed = match &step {
                     FlowStep::Vertices(v) => v.iter().map(|v| v.length()).fold(0.0, f64::max),
@@ -244,13 +248,11 @@ impl FrontTracker {
                     break;
                 }
                 h = limit;
-                step = flow.step(&self.c, self.flow_steps, h, &fixed);
+                step = flow.step(&self.c, self.flow_steps, now, h, &fixed);
             }
             match &step {
-                FlowStep::Vertices(v) => self.move_safely(Motion::Vertices(v), t + done, h, 0)?,
-                FlowStep::Field(noise) => {
-                    self.move_safely(Motion::Field(*noise), t + done, h, 0)?
-                }
+                FlowStep::Vertices(v) => self.move_safely(Motion::Vertices(v), now, h, 0)?,
+                FlowStep::Field(noise) => self.move_safely(Motion::Field(*noise), now, h, 0)?,
             }
             let merged = if flow.merges() {
                 self.merge(MERGE_DISTANCE, None)

@@ -14,11 +14,12 @@ use super::{interface_faces, normal_speed, PairSpeed};
 use crate::front::connectivity::Connectivity;
 use crate::front::least_squares::constrained_solution;
 
-/// Velocity of every vertex (zero for unused vertices and those only on domain walls).
-pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed]) -> Vec<DVec3> {
+/// Velocity of every vertex (zero for unused vertices and those only on domain walls), with
+/// every speed multiplied by `sign` (−1 for the reversed flow).
+pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed], sign: f64) -> Vec<DVec3> {
     (0..c.mesh.vertices.len() as u32)
         .into_par_iter()
-        .map(|v| vertex_velocity(c, speeds, v))
+        .map(|v| sign * vertex_velocity(c, speeds, v))
         .collect()
 }
 
