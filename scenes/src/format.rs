@@ -267,9 +267,13 @@ pub enum VelocitySpec {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         reverse_at: Option<f64>,
     },
-    /// The same flow by face offsetting (Jiao 2007; paper 000 §8.2's cyclic flow); front
-    /// tracker only.
-    NormalFom { speeds: Vec<PairSpeedSpec> },
+    /// The same flow by face offsetting (Jiao 2007; paper 000 §8.2's flows); front tracker
+    /// only; `reverse_at` as for `normal`.
+    NormalFom {
+        speeds: Vec<PairSpeedSpec>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        reverse_at: Option<f64>,
+    },
     /// Mean-curvature flow (paper 000 §8.4) at `rate` m²/s (default 1); front tracker only.
     MeanCurvature {
         #[serde(default = "default_rate")]

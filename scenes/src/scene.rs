@@ -506,17 +506,25 @@ fn compile_mesh_flow(
             })
             .collect()
     };
+    let reversal = |at: Option<f64>| {
+        at.map(|at| finite(at, "velocity.reverse_at", bad))
+            .transpose()
+    };
     Ok(Some(match v {
         VelocitySpec::Normal {
             speeds: s,
             reverse_at,
         } => MeshFlow::Normal {
             speeds: speeds(s)?,
-            reverse_at: reverse_at
-                .map(|at| finite(at, "velocity.reverse_at", bad))
-                .transpose()?,
+            reverse_at: reversal(*reverse_at)?,
         },
-        VelocitySpec::NormalFom { speeds: s } => MeshFlow::NormalOffset(speeds(s)?),
+        VelocitySpec::NormalFom {
+            speeds: s,
+            reverse_at,
+        } => MeshFlow::NormalOffset {
+            speeds: speeds(s)?,
+            reverse_at: reversal(*reverse_at)?,
+        },
         VelocitySpec::MeanCurvature { rate } => MeshFlow::MeanCurvature {
             rate: positive(*rate, "velocity.rate", bad)?,
         },

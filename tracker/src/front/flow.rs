@@ -35,9 +35,13 @@ pub enum MeshFlow {
         speeds: Vec<PairSpeed>,
         reverse_at: Option<f64>,
     },
-    /// Constant-speed normal flow by face offsetting (Jiao 2007), as paper 000 §8.2 uses for
-    /// the cyclic case: each vertex moves so that its faces move by their own offsets.
-    NormalOffset(Vec<PairSpeed>),
+    /// Constant-speed normal flow by face offsetting (Jiao 2007), as paper 000 §8.2 uses:
+    /// each vertex moves so that its faces move by their own offsets; reversed from
+    /// `reverse_at` on as [`MeshFlow::Normal`].
+    NormalOffset {
+        speeds: Vec<PairSpeed>,
+        reverse_at: Option<f64>,
+    },
     /// Mean-curvature flow, the gradient flow of the total interface area (§8.4, Meyer et
     /// al. 2002 over all incident triangles), scaled by `rate` (m²/s; 1 gives r² = r0² − 4t
     /// for a sphere).
@@ -72,13 +76,11 @@ impl MeshFlow {
     ) -> FlowStep<'_> {
         match self {
             MeshFlow::Normal { speeds, reverse_at } => {
-                let sign = match reverse_at {
-                    Some(at) if reached(*at, t) => -1.0,
-                    _ => 1.0,
-                };
-                FlowStep::Vertices(normal::velocities(c, speeds, sign))
+                FlowStep::Vertices(normal::velocities(c, speeds, sign(*reverse_at, t)))
             }
-            MeshFlow::NormalOffset(speeds) => FlowStep::Vertices(offset::velocities(c, speeds)),
+            MeshFlow::NormalOffset { speeds, reverse_at } => {
+                FlowStep::Vertices(offset::velocities(c, speeds, sign(*reverse_at, t)))
+            }
             MeshFlow::MeanCurvature { rate } => {
                 FlowStep::Vertices(curvature::implicit_velocities(c, *rate, h, fixed))
             }
@@ -96,6 +98,10 @@ impl MeshFlow {
     pub fn change_after(&self, t: f64) -> Option<f64> {
         match self {
             MeshFlow::Normal {
+                reverse_at: Some(at),
+                ..
+            }
+            | MeshFlow::NormalOffset {
                 reverse_at: Some(at),
                 ..
             } if !reached(*at, t) => Some(*at),
@@ -131,6 +137,14 @@ impl MeshFlow {
             MeshFlow::MeanCurvature { rate } => Some(curvature::velocities(c, *rate)),
             _ => None,
         }
+    }
+}
+
+/// The factor of every speed at time `t` of a flow reversed at `reverse_at`.
+fn sign(reverse_at: Option<f64>, t: f64) -> f64 {
+    match reverse_at {
+        Some(at) if reached(at, t) => -1.0,
+        _ => 1.0,
     }
 }
 

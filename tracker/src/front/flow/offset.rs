@@ -19,8 +19,9 @@ use crate::front::least_squares::constrained_solution;
 /// of a smooth one-ring a tenth of the curvature radius across spread by under 0.01.
 pub(super) const NULL_SPACE: f64 = 0.03;
 
-/// Velocity of every vertex (zero where no face constrains it).
-pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed]) -> Vec<DVec3> {
+/// Velocity of every vertex (zero where no face constrains it), every speed multiplied by
+/// `sign` (−1 for the reversed flow).
+pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed], sign: f64) -> Vec<DVec3> {
     (0..c.mesh.vertices.len() as u32)
         .into_par_iter()
         .map(|v| {
@@ -31,7 +32,7 @@ pub(super) fn velocities(c: &Connectivity, speeds: &[PairSpeed]) -> Vec<DVec3> {
                 let n = area_normal.normalize_or_zero();
                 let n = Vector3::new(n.x, n.y, n.z);
                 quadric += area * n * n.transpose();
-                rhs += area * normal_speed(speeds, labels) * n;
+                rhs += area * sign * normal_speed(speeds, labels) * n;
             }
             constrained_solution(quadric, rhs, NULL_SPACE)
         })

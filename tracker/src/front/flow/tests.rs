@@ -53,7 +53,10 @@ fn normal_flows_grow_a_sphere_at_their_speed() {
             speeds: speeds.clone(),
             reverse_at: None,
         },
-        MeshFlow::NormalOffset(speeds),
+        MeshFlow::NormalOffset {
+            speeds,
+            reverse_at: None,
+        },
     ] {
         let mut tracker = sphere_tracker(r0, flow.clone());
         // The inscribed polyhedron's volume radius falls short of the vertex radius by the
