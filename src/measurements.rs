@@ -63,7 +63,8 @@ pub fn add_measurements(
 }
 
 /// Adds `regions` (live regions of a tracker that counts them) and `events` {name: count over
-/// the frame} (its topology events: merge snaps, T1, T2), each only when there is one.
+/// the frame} (the front tracker's topology events: merge snaps, T1, T2; the contouring
+/// tracker's specks removed), each only when there is one.
 pub fn add_topology(line: &mut Value, regions: Option<usize>, events: &[(&'static str, usize)]) {
     if let Some(n) = regions {
         line["regions"] = json!(n);

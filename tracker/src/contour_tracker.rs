@@ -12,6 +12,7 @@ use crate::contour::{MdTree, PhaseSampler};
 use crate::mesh::LabeledMesh;
 use crate::query::MeshQuery;
 use crate::snapshot::TrackerSnapshot;
+use crate::specks::remove_specks;
 use crate::tracker::departure_point;
 use crate::tracker::{InterfaceTracker, StepStats, TrackerError};
 use crate::volume_correction::components::Components;
@@ -50,6 +51,11 @@ pub struct ContourTracker {
 /// steps keep more of it.
 pub const DEFAULT_TRAVEL_CELLS: f64 = 8.0;
 
+/// Components smaller than this many finest cells, facing one phase, are specks that each
+/// step removes ([`remove_specks`]): below a cell the grid resolves no shape, only the
+/// contouring's fragments of a torn sheet.
+pub const SPECK_CELLS: f64 = 1.0;
+
 impl ContourTracker {
     /// Builds the first mesh from exact initial φ, χ (paper 004 §7.2: "the tree was initially
     /// built with exact functions"). `background` is the phase everywhere when no interface exists.
@@ -59,7 +65,7 @@ impl ContourTracker {
         n_phases: usize,
         background: PhaseId,
     ) -> (ContourTracker, StepStats) {
-        let (tree, mesh, query, stats) = rebuild(&grid, initial, background);
+        let (tree, mesh, query, stats) = rebuild(&grid, initial, background, None);
         let volume_targets = Some(mesh.phase_volumes(n_phases));
         let mut tracker = ContourTracker::assemble(grid, n_phases, background, tree, mesh, query);
         tracker.set_volume_targets(volume_targets);
@@ -201,28 +207,42 @@ impl ContourTracker {
     }
 }
 
-/// Build, contour, redistance: the three timed stages of paper 004 Table 1.
+/// Build, contour, redistance: the three timed stages of paper 004 Table 1. With `specks`
+/// (the phases' count), the specks of the contoured mesh are removed before it is redistanced
+/// ([`remove_specks`], bound [`SPECK_CELLS`] cells), counted in the stats' events.
 fn rebuild(
     grid: &GridSpec,
     sampler: &dyn PhaseSampler,
     background: PhaseId,
+    specks: Option<usize>,
 ) -> (MdTree, LabeledMesh, MeshQuery, StepStats) {
     let t0 = Instant::now();
     let mut tree = MdTree::build(grid, sampler);
     let t1 = Instant::now();
-    let mesh = tree.contour(sampler);
+    let mut mesh = tree.contour(sampler);
     let t2 = Instant::now();
+    let mut stages = vec![
+        ("build", (t1 - t0).as_secs_f64()),
+        ("contour", (t2 - t1).as_secs_f64()),
+    ];
+    let mut events = Vec::new();
+    if let Some(n_phases) = specks {
+        let bound = SPECK_CELLS * grid.h.powi(3);
+        events.push((
+            "specks_removed",
+            remove_specks(&mut mesh, n_phases, background, bound),
+        ));
+        stages.push(("specks", t2.elapsed().as_secs_f64()));
+    }
+    let t3 = Instant::now();
     let query = MeshQuery::new(&mesh, background);
     tree.redistance(&|x| query.distance(x));
-    let t3 = Instant::now();
+    stages.push(("redistance", t3.elapsed().as_secs_f64()));
     let stats = StepStats {
-        stages: vec![
-            ("build", (t1 - t0).as_secs_f64()),
-            ("contour", (t2 - t1).as_secs_f64()),
-            ("redistance", (t3 - t2).as_secs_f64()),
-        ],
+        stages,
         cells: tree.cell_count(),
         interface_cells: tree.interface_cell_count(),
+        events,
         ..StepStats::default()
     };
     (tree, mesh, query, stats)
@@ -294,7 +314,7 @@ impl InterfaceTracker for ContourTracker {
                     self.grid.h,
                 )
             });
-            let built = rebuild(&self.grid, &departure, self.background);
+            let built = rebuild(&self.grid, &departure, self.background, Some(self.n_phases));
             if bad.load(Ordering::Relaxed) {
                 let c = (self.grid.origin + self.grid.upper()) * 0.5;
                 let x = first_non_finite(velocity, &self.grid, t, dt).unwrap_or(c);

@@ -13,6 +13,7 @@ pub mod query;
 pub mod redistance;
 pub mod sampling;
 pub mod snapshot;
+pub mod specks;
 pub mod tracker;
 pub mod volume_correction;
 
