@@ -34,6 +34,7 @@ pub fn build_tracker(
                 ContourTracker::new(scene.grid, &initial, n_phases, background);
             tracker.set_volume_targets(scene.volume_targets());
             tracker.set_max_travel(scene.file.time.cfl * scene.grid.h);
+            tracker.set_junction_weights(scene.file.domain.slab);
             Ok((Box::new(tracker), first))
         }
         (
@@ -57,6 +58,7 @@ pub fn build_tracker(
                 carried_loss,
             );
             tracker.set_max_travel(scene.file.time.cfl * scene.grid.h);
+            tracker.set_junction_weights(scene.file.domain.slab);
             Ok((Box::new(tracker), StepStats::default()))
         }
         (TrackerKind::Front, snapshot) => {

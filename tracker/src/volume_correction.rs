@@ -69,7 +69,8 @@ impl VolumeShift {
     /// Components without an interface, or with a target of zero, are left alone (as is the
     /// background, which is no component); no interface moves more than `cap`, so a large
     /// loss is given back over several steps. Faces within `2 · reach` of a junction move
-    /// less ([`junction_weights`]); the tracker's `reach` is its grid spacing.
+    /// less ([`junction_weights`]; none with a `reach` of 0); the tracker's `reach` is its
+    /// grid spacing in slabs, 0 in 3D ([`crate::ContourTracker::set_junction_weights`]).
     pub fn new(
         mesh: &LabeledMesh,
         components: &Components,
@@ -229,7 +230,7 @@ fn present(aimed: &[Option<f64>], after: &[f64], i: usize) -> Option<(f64, f64)>
 /// faces (never moved) and for every face of a corrected component whose faces would all get
 /// 0 (a speck at a junction is still corrected, as before). The grid nodes that decide where
 /// contouring puts a junction sample faces within about a cell of it, so a reach of one cell
-/// keeps the offsets off them.
+/// keeps the offsets off them. A `reach` of 0 weighs every face 1.
 pub fn junction_weights(
     mesh: &LabeledMesh,
     components: &Components,
@@ -237,6 +238,9 @@ pub fn junction_weights(
     reach: f64,
 ) -> Vec<f64> {
     let count = mesh.triangle_count();
+    if reach <= 0.0 {
+        return vec![1.0; count];
+    }
     let interface = |t: usize| !mesh.labels[t].contains(&OUTSIDE);
     // Up to three distinct phases seen so far at each vertex; a fourth is not needed.
     let mut seen: Vec<[PhaseId; 3]> = vec![[OUTSIDE; 3]; mesh.vertices.len()];
@@ -262,7 +266,7 @@ pub fn junction_weights(
     }
     let mut weights: Vec<f64> = (0..count)
         .map(|t| {
-            if junctions.is_empty() || !interface(t) || reach <= 0.0 {
+            if junctions.is_empty() || !interface(t) {
                 return 1.0;
             }
             let [a, b, c] = mesh.corners(t);
