@@ -45,6 +45,8 @@ fn run_checking(
     let (mut tracker, _) = ContourTracker::new(scene.grid, &sampler, n, scene.initial.background);
     tracker.set_volume_targets(scene.volume_targets());
     tracker.set_max_travel(scene.file.time.cfl * scene.grid.h);
+    // As `coupling::build_tracker` sets it.
+    tracker.set_junction_weights(scene.file.domain.slab);
     let min_area = 0.0;
     invariants::check(tracker.mesh(), min_area).unwrap_or_else(|e| panic!("{name} start: {e}"));
     check(tracker.mesh(), -1);
