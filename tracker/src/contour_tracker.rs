@@ -41,7 +41,7 @@ pub struct ContourTracker {
     carried_loss: Vec<f64>,
     /// How a mesh's components are found: [`Components::find`] (a test swaps in the per-phase
     /// grouping to show what that did).
-    find_components: fn(&LabeledMesh, usize, PhaseId) -> Components,
+    regroup: fn(Components, usize) -> Components,
     /// How far (m) the interfaces may move in one step ([`ContourTracker::set_max_travel`]).
     max_travel: f64,
     /// Whether the volume correction moves faces near junctions less
@@ -68,7 +68,7 @@ impl ContourTracker {
         n_phases: usize,
         background: PhaseId,
     ) -> (ContourTracker, StepStats) {
-        let (tree, mesh, query, stats) = rebuild(&grid, initial, background, None);
+        let (tree, mesh, query, stats, _) = rebuild(&grid, initial, background, None);
         let volume_targets = Some(mesh.phase_volumes(n_phases));
         let mut tracker = ContourTracker::assemble(grid, n_phases, background, tree, mesh, query);
         tracker.set_volume_targets(volume_targets);
@@ -96,7 +96,7 @@ impl ContourTracker {
             components: Components::default(),
             component_targets: Vec::new(),
             carried_loss: Vec::new(),
-            find_components: Components::find,
+            regroup: |split, _| split,
             max_travel: DEFAULT_TRAVEL_CELLS * grid.h,
             junction_weights: false,
         }
@@ -144,7 +144,10 @@ impl ContourTracker {
     /// components by volume, and the carried loss starts again from zero.
     pub fn set_volume_targets(&mut self, targets: Option<Vec<f64>>) {
         self.components = match &targets {
-            Some(_) => (self.find_components)(&self.mesh, self.n_phases, self.background),
+            Some(_) => (self.regroup)(
+                Components::find(&self.mesh, self.n_phases, self.background),
+                self.n_phases,
+            ),
             None => Components::default(),
         };
         let n = self.components.len();
@@ -160,7 +163,7 @@ impl ContourTracker {
     /// per-component one replaced, for the tests that show the difference.
     #[cfg(test)]
     pub(crate) fn correct_whole_phases(&mut self) {
-        self.find_components = Components::whole_phases;
+        self.regroup = Components::whole_phases;
         self.set_volume_targets(self.volume_targets.clone());
     }
 
@@ -223,14 +226,15 @@ impl ContourTracker {
 }
 
 /// Build, contour, redistance: the three timed stages of paper 004 Table 1. With `specks`
-/// (the phases' count), the specks of the contoured mesh are removed before it is redistanced
-/// ([`remove_specks`], bound [`SPECK_CELLS`] cells), counted in the stats' events.
+/// (the phases' count), the contoured mesh's components are found and its specks removed
+/// before it is redistanced ([`remove_specks`], bound [`SPECK_CELLS`] cells, counted in the
+/// stats' events), and the components of the mesh are returned for the volume correction.
 fn rebuild(
     grid: &GridSpec,
     sampler: &dyn PhaseSampler,
     background: PhaseId,
     specks: Option<usize>,
-) -> (MdTree, LabeledMesh, MeshQuery, StepStats) {
+) -> Built {
     let t0 = Instant::now();
     let mut tree = MdTree::build(grid, sampler);
     let t1 = Instant::now();
@@ -241,14 +245,16 @@ fn rebuild(
         ("contour", (t2 - t1).as_secs_f64()),
     ];
     let mut events = Vec::new();
-    if let Some(n_phases) = specks {
+    let components = specks.map(|n_phases| {
+        let found = Components::find(&mesh, n_phases, background);
+        stages.push(("components", t2.elapsed().as_secs_f64()));
+        let started = Instant::now();
         let bound = SPECK_CELLS * grid.h.powi(3);
-        events.push((
-            "specks_removed",
-            remove_specks(&mut mesh, n_phases, background, bound),
-        ));
-        stages.push(("specks", t2.elapsed().as_secs_f64()));
-    }
+        let (removed, left) = remove_specks(&mut mesh, found, n_phases, background, bound);
+        events.push(("specks_removed", removed));
+        stages.push(("specks", started.elapsed().as_secs_f64()));
+        left
+    });
     let t3 = Instant::now();
     let query = MeshQuery::new(&mesh, background);
     tree.redistance(&|x| query.distance(x));
@@ -260,8 +266,18 @@ fn rebuild(
         events,
         ..StepStats::default()
     };
-    (tree, mesh, query, stats)
+    (tree, mesh, query, stats, components)
 }
+
+/// What [`rebuild`] makes: the tree, the mesh, its query, the step's stats and, when specks
+/// were sought, the mesh's components.
+type Built = (
+    MdTree,
+    LabeledMesh,
+    MeshQuery,
+    StepStats,
+    Option<Components>,
+);
 
 /// Backtrace, then the exact query on the previous mesh (§3, §4).
 struct Departure<'a> {
@@ -318,7 +334,7 @@ impl InterfaceTracker for ContourTracker {
         let back_to_departure = |x: DVec3| departure_point(velocity, x, t, dt).clamp(lo, hi);
         let mut more_stages: Vec<(&'static str, f64)> = Vec::new();
         let mut retries = 0;
-        let ((tree, mesh, query, mut stats), next) = loop {
+        let ((tree, mesh, query, mut stats, _), next) = loop {
             // A quarter cell per step at most: a sheet lost in one step comes back over a few.
             departure.shift = aim.as_ref().map(|aim| {
                 VolumeShift::new(
@@ -333,7 +349,7 @@ impl InterfaceTracker for ContourTracker {
                     },
                 )
             });
-            let built = rebuild(&self.grid, &departure, self.background, Some(self.n_phases));
+            let mut built = rebuild(&self.grid, &departure, self.background, Some(self.n_phases));
             if bad.load(Ordering::Relaxed) {
                 let c = (self.grid.origin + self.grid.upper()) * 0.5;
                 let x = first_non_finite(velocity, &self.grid, t, dt).unwrap_or(c);
@@ -349,8 +365,11 @@ impl InterfaceTracker for ContourTracker {
             else {
                 break (built, None);
             };
-            let started = Instant::now();
-            let found = (self.find_components)(&built.1, self.n_phases, self.background);
+            let split = built
+                .4
+                .take()
+                .expect("rebuild with specks finds the components");
+            let found = (self.regroup)(split, self.n_phases);
             let traced = Instant::now();
             let succession = Succession::trace(
                 &self.mesh,
@@ -360,7 +379,6 @@ impl InterfaceTracker for ContourTracker {
                 &found,
                 &back_to_departure,
             );
-            more_stages.push(("components", (traced - started).as_secs_f64()));
             more_stages.push(("succession", traced.elapsed().as_secs_f64()));
             let targets = &self.component_targets;
             let after = succession.pull_back(&found.volume, targets);

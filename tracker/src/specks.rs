@@ -15,20 +15,21 @@ use polyphase_grid::{PhaseId, OUTSIDE};
 use crate::mesh::LabeledMesh;
 use crate::volume_correction::components::{Components, NONE};
 
-/// Removes every speck of `mesh` — a component of a phase other than `background` (of
-/// `n_phases`) enclosing less than `max_volume`, all of whose interfaces face one other phase
-/// and no other speck — and returns how many it removed. Vertices no triangle uses any more
-/// are dropped.
+/// Removes every speck of `mesh`, whose components ([`Components::find`] with `n_phases` and
+/// `background`) are `components` — a component enclosing less than `max_volume`, all of whose
+/// interfaces face one other phase and no other speck — and returns how many it removed and
+/// the components of the mesh left (found again only when it changed). Vertices no triangle
+/// uses any more are dropped.
 pub fn remove_specks(
     mesh: &mut LabeledMesh,
+    components: Components,
     n_phases: usize,
     background: PhaseId,
     max_volume: f64,
-) -> usize {
-    let components = Components::find(mesh, n_phases, background);
+) -> (usize, Components) {
     let small: Vec<bool> = components.volume.iter().map(|&v| v < max_volume).collect();
     if !small.contains(&true) {
-        return 0;
+        return (0, components);
     }
     // Per small component, the one phase its interfaces face; `None` once a second appears.
     let mut facing: Vec<Option<Option<PhaseId>>> = vec![Some(None); components.len()];
@@ -59,7 +60,7 @@ pub fn remove_specks(
         .collect();
     let removed = new_phase.iter().filter(|p| p.is_some()).count();
     if removed == 0 {
-        return 0;
+        return (0, components);
     }
     let mut keep = Vec::with_capacity(mesh.triangle_count());
     for (t, sides) in components.sides.iter().enumerate() {
@@ -83,7 +84,7 @@ pub fn remove_specks(
         }
     }
     retain_triangles(mesh, &keep);
-    removed
+    (removed, Components::find(mesh, n_phases, background))
 }
 
 /// Keeps the triangles `keep` (ascending) of `mesh` and the vertices they use, in order.

@@ -18,6 +18,15 @@ fn blocks(extra: &[([usize; 3], PhaseId)]) -> LabeledMesh {
 const CELL: f64 = 1.0 / 512.0;
 const BOUND: f64 = 2.0 * CELL;
 
+/// [`remove_specks`] below [`BOUND`] on a three-phase mesh with background 0; checks that the
+/// components it hands back are those of the mesh it leaves.
+fn remove(mesh: &mut LabeledMesh) -> usize {
+    let found = Components::find(mesh, 3, 0);
+    let (removed, left) = remove_specks(mesh, found, 3, 0, BOUND);
+    assert_eq!(left, Components::find(mesh, 3, 0));
+    removed
+}
+
 /// Phase volumes, exact on the lattice up to rounding.
 fn volumes(mesh: &LabeledMesh) -> Vec<f64> {
     mesh.phase_volumes(3)
@@ -26,7 +35,7 @@ fn volumes(mesh: &LabeledMesh) -> Vec<f64> {
 #[test]
 fn a_lone_speck_becomes_the_phase_around_it() {
     let mut mesh = blocks(&[([6, 6, 5], 1)]);
-    assert_eq!(remove_specks(&mut mesh, 3, 0, BOUND), 1);
+    assert_eq!(remove(&mut mesh), 1);
     check(&mesh, 0.0).expect("closed and label-consistent");
     let v = volumes(&mesh);
     // The x < ½ block alone (256 cells); the speck's cell went to phase 0.
@@ -41,7 +50,7 @@ fn a_lone_speck_becomes_the_phase_around_it() {
 fn a_speck_on_the_walls_gives_its_wall_faces_to_the_phase_around_it() {
     // A corner cell of phase 2: three of its faces are on the domain boundary.
     let mut mesh = blocks(&[([7, 7, 7], 2)]);
-    assert_eq!(remove_specks(&mut mesh, 3, 0, BOUND), 1);
+    assert_eq!(remove(&mut mesh), 1);
     check(&mesh, 0.0).expect("closed and label-consistent");
     let v = volumes(&mesh);
     assert_eq!(v[2], 0.0);
@@ -51,7 +60,7 @@ fn a_speck_on_the_walls_gives_its_wall_faces_to_the_phase_around_it() {
 #[test]
 fn a_speck_inside_another_liquid_becomes_that_liquid() {
     let mut mesh = blocks(&[([1, 2, 3], 2)]);
-    assert_eq!(remove_specks(&mut mesh, 3, 0, BOUND), 1);
+    assert_eq!(remove(&mut mesh), 1);
     check(&mesh, 0.0).expect("closed and label-consistent");
     let v = volumes(&mesh);
     assert_eq!(v[2], 0.0);
@@ -63,17 +72,17 @@ fn a_speck_between_two_phases_or_above_the_bound_stays() {
     // On the x = ½ plane, phase 2 touches phase 1 and phase 0: no one phase to become.
     let mut between = blocks(&[([4, 3, 3], 2)]);
     let before = between.clone();
-    assert_eq!(remove_specks(&mut between, 3, 0, BOUND), 0);
+    assert_eq!(remove(&mut between), 0);
     assert_eq!(between, before);
     // Two cells of phase 2 side by side make a component of two cells: not below the bound.
     let mut pair = blocks(&[([6, 6, 5], 2), ([6, 6, 6], 2)]);
     let before = pair.clone();
-    assert_eq!(remove_specks(&mut pair, 3, 0, BOUND), 0);
+    assert_eq!(remove(&mut pair), 0);
     assert_eq!(pair, before);
     // Two specks of different phases face to face: both stay.
     let mut touching = blocks(&[([6, 6, 5], 2), ([6, 6, 6], 1)]);
     let before = touching.clone();
-    assert_eq!(remove_specks(&mut touching, 3, 0, BOUND), 0);
+    assert_eq!(remove(&mut touching), 0);
     assert_eq!(touching, before);
 }
 

@@ -89,11 +89,10 @@ impl Components {
         count
     }
 
-    /// The same mesh with all components of a phase taken as one: the per-phase correction
-    /// this module replaced, kept to show what it did.
+    /// These components with all components of a phase taken as one: the per-phase
+    /// correction this module replaced, kept to show what it did.
     #[cfg(test)]
-    pub(crate) fn whole_phases(mesh: &LabeledMesh, n_phases: usize, background: PhaseId) -> Self {
-        let split = Components::find(mesh, n_phases, background);
+    pub(crate) fn whole_phases(split: Components, n_phases: usize) -> Self {
         let mut index = vec![NONE; n_phases];
         let mut whole = Components {
             sides: split.sides.clone(),
@@ -319,7 +318,7 @@ mod tests {
                 .into_iter()
                 .all(|t| found.sides[t] == [NONE, c as u32]));
         }
-        let whole = Components::whole_phases(&mesh, 3, 0);
+        let whole = Components::whole_phases(Components::find(&mesh, 3, 0), 3);
         assert_eq!(whole.phase, vec![1, 2]);
         assert!((whole.volume[0] - found.volume[0] - found.volume[2]).abs() < 1e-15);
         assert_eq!(whole.sides[2 * per_ball], [NONE, 0]);
