@@ -211,7 +211,9 @@ impl ContourTracker {
         &self.grid
     }
 
-    /// Exact φ, χ at a point: from the tree where its leaf is uniform, else off the mesh.
+    /// φ, χ at a point: from the tree where its leaf is uniform, else off the mesh. χ is exact;
+    /// φ is exact within the redistanced band; beyond it, only at least about 3 h (the tree's
+    /// build samples far nodes no more exactly: [`PhaseSampler::sample_near`]).
     pub fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
         self.tree.sample(x).unwrap_or_else(|| {
             let n = self.query.query(x);
@@ -282,6 +284,10 @@ type Built = (
 /// Backtrace, then the exact query on the previous mesh (§3, §4).
 struct Departure<'a> {
     previous: &'a MeshQuery,
+    /// The tree the previous mesh was contoured from: χ far from it.
+    previous_tree: &'a MdTree,
+    /// Finest cell size of the previous tree.
+    h: f64,
     velocity: &'a dyn VelocityField,
     lo: DVec3,
     hi: DVec3,
@@ -292,19 +298,62 @@ struct Departure<'a> {
     shift: Option<VolumeShift>,
 }
 
-impl PhaseSampler for Departure<'_> {
-    fn sample(&self, x: DVec3) -> (f64, PhaseId) {
+impl Departure<'_> {
+    /// The departure point of `x`, clamped to the domain; `None` (and the step marked bad)
+    /// where the velocity is not finite.
+    fn origin(&self, x: DVec3) -> Option<DVec3> {
         let x0 = departure_point(self.velocity, x, self.t, self.dt);
         if !x0.is_finite() {
             self.bad.store(true, Ordering::Relaxed);
-            return (0.0, 0);
+            return None;
         }
-        let x0 = x0.clamp(self.lo, self.hi);
-        let n = match &self.shift {
-            Some(shift) => self.previous.query_shifted(x0, &|t| shift.shift(t)),
-            None => self.previous.query_curved(x0),
-        };
+        Some(x0.clamp(self.lo, self.hi))
+    }
+
+    /// φ, χ of the previous (curved, shifted) mesh at `x0`, searched within `max_distance`.
+    fn read(&self, x0: DVec3, max_distance: f64) -> Option<(f64, PhaseId)> {
+        let shift = |t: usize| self.shift.as_ref().map_or(0.0, |s| s.shift(t));
+        let n = self
+            .previous
+            .query_shifted_within(x0, max_distance, &shift)?;
+        Some((n.distance, n.phase))
+    }
+
+    /// φ, χ with the unbounded search.
+    fn read_all(&self, x0: DVec3) -> (f64, PhaseId) {
+        let shift = |t: usize| self.shift.as_ref().map_or(0.0, |s| s.shift(t));
+        let n = self.previous.query_shifted(x0, &shift);
         (n.distance, n.phase)
+    }
+}
+
+/// How much farther than a flat triangle the curved, shifted interface of a contoured mesh
+/// can lie, in finest cells: the Phong bulge is at most ½·sin 25°·√3 h ≈ 0.37 h (a contoured
+/// triangle spans at most a cell's diagonal, and corners more than 25° off the facet do not
+/// bulge) and the volume correction's shift at most ¼ h; one cell covers both.
+const CURVED_MARGIN_CELLS: f64 = 1.0;
+
+impl PhaseSampler for Departure<'_> {
+    fn sample(&self, x: DVec3) -> (f64, PhaseId) {
+        self.origin(x).map_or((0.0, 0), |x0| self.read_all(x0))
+    }
+
+    /// With no flat triangle of the previous mesh within `reach` plus the curved margin, the
+    /// departure point lies in a leaf of the previous tree that no interface crosses (only
+    /// mixed finest cells hold triangles, and every point of a mixed cell is within its
+    /// diagonal of one), so that leaf's χ is the mesh's phase there and `reach` a lower bound.
+    /// A mixed leaf without a triangle near (a removed speck's cells) takes the full search.
+    fn sample_near(&self, x: DVec3, reach: f64) -> (f64, PhaseId) {
+        let Some(x0) = self.origin(x) else {
+            return (0.0, 0);
+        };
+        if let Some(near) = self.read(x0, reach + CURVED_MARGIN_CELLS * self.h) {
+            return near;
+        }
+        match self.previous_tree.sample(x0) {
+            Some((_, chi)) => (reach, chi),
+            None => self.read_all(x0),
+        }
     }
 }
 
@@ -318,6 +367,8 @@ impl InterfaceTracker for ContourTracker {
         let bad = AtomicBool::new(false);
         let mut departure = Departure {
             previous: &self.query,
+            previous_tree: &self.tree,
+            h: self.grid.h,
             velocity,
             lo: self.grid.origin,
             hi: self.grid.upper(),
@@ -475,3 +526,6 @@ fn first_non_finite(v: &dyn VelocityField, grid: &GridSpec, t: f64, dt: f64) -> 
         .map(|(i, j, k)| grid.node(i, j, k))
         .find(|&x| !departure_point(v, x, t, dt).is_finite())
 }
+
+#[cfg(test)]
+mod tests;

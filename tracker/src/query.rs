@@ -204,25 +204,36 @@ impl MeshQuery {
     /// the back phase), as a level-set offset of the signed distance: the volume correction of
     /// [`crate::volume_correction`].
     pub fn query_shifted(&self, x: DVec3, shift: &dyn Fn(usize) -> f64) -> Nearest {
-        let Some((n, _, t)) = self.locate(x, f64::INFINITY) else {
-            return self.query(x);
-        };
+        self.query_shifted_within(x, f64::INFINITY, shift)
+            .unwrap_or_else(|| self.query(x))
+    }
+
+    /// [`MeshQuery::query_shifted`] when a flat interface point lies within `max_distance` of
+    /// `x`, the same answer to the bit (the search starts from a finite bound, which prunes
+    /// but does not change which triangle is nearest); `None` otherwise.
+    pub fn query_shifted_within(
+        &self,
+        x: DVec3,
+        max_distance: f64,
+        shift: &dyn Fn(usize) -> f64,
+    ) -> Option<Nearest> {
+        let (n, _, t) = self.locate(x, max_distance * max_distance)?;
         let [front, back] = self.labels[t];
         let signed = if n.phase == front {
             n.distance
         } else if n.phase == back {
             -n.distance
         } else {
-            return n;
+            return Some(n);
         };
         let normal = self.tris[t].normal;
         let bulge = self.bulge(t, n.point) + shift(self.source[t] as usize);
         let curved = signed - bulge;
-        Nearest {
+        Some(Nearest {
             distance: curved.abs(),
             phase: if curved > 0.0 { front } else { back },
             point: n.point + bulge * normal,
-        }
+        })
     }
 
     /// The Phong offset (α = ½) of the point `y` of tree triangle `t`, along its normal.

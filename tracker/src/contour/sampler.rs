@@ -12,6 +12,14 @@ use polyphase_grid::PhaseId;
 pub trait PhaseSampler: Sync {
     /// φ(x) ≥ 0 and χ(x) at the point `x`.
     fn sample(&self, x: DVec3) -> (f64, PhaseId);
+
+    /// [`PhaseSampler::sample`] where φ(x) < `reach`; elsewhere χ as exactly, but φ may be any
+    /// lower bound of at least `reach`. The tree's build asks no more of its far nodes (§6.2:
+    /// a centre only decides whether φ < 3·h_cell), so a sampler may skip the far search.
+    fn sample_near(&self, x: DVec3, reach: f64) -> (f64, PhaseId) {
+        let _ = reach;
+        self.sample(x)
+    }
 }
 
 impl<F: Fn(DVec3) -> (f64, PhaseId) + Sync> PhaseSampler for F {

@@ -16,6 +16,13 @@ const MAX_BLOCK: u64 = 16;
 
 /// Split factor of §6.2: split a cell of edge `h_c` when φ(centre) < `SPLIT_FACTOR`·h_c.
 const SPLIT_FACTOR: f64 = 3.0;
+/// How far (finest cells) a corner's φ is sampled exactly: corners of interface cells lie
+/// within a cell's diagonal of the interface, stretched by the step's flow, and only they
+/// bound crossings ([`crate::contour::bisect`]) or seed the redistancing; other corners need χ.
+const CORNER_REACH_CELLS: f64 = 3.0;
+/// Low bits of a sampled point's key that say what it is sampled for.
+const USE_BITS: u32 = 6;
+const USE_MASK: u64 = (1 << USE_BITS) - 1;
 
 /// One cell of the forest: a box of `edge` unit cells with lower corner `min` (in cells).
 /// It is a cube of edge `size` except along a thin axis of the grid (a slab's z), where it
@@ -181,28 +188,54 @@ impl MdTree {
     }
 
     /// Evaluate the sampler at the corners (and centres, size ≥ 2) of `frontier` not yet stored.
+    ///
+    /// Each point is sampled only as far as its uses need ([`PhaseSampler::sample_near`]): a
+    /// centre of a cell of size s up to the split threshold 3·h·s; a corner up to
+    /// [`CORNER_REACH_CELLS`] cells, beyond which only its χ is read (a far corner never
+    /// bounds a crossing or seeds the redistancing, and corners are never centres later:
+    /// corners of size-s cells lie on multiples of s, centres of smaller cells on odd
+    /// multiples of half their size).
     fn sample_level(&mut self, frontier: &[u32], sampler: &dyn PhaseSampler) {
         let lat = self.lattice;
         let cells = &self.cells;
+        // Node id above, the use's size code below: 0 for a corner, log2(s) + 1 for a centre.
         let mut pts: Vec<u64> = frontier
             .par_iter()
             .flat_map_iter(|&c| {
                 let cell = cells[c as usize];
-                let centre = (cell.size >= 2).then(|| lat.id(cell.centre()));
-                (0..8).map(move |k| lat.id(cell.corner(k))).chain(centre)
+                let centre = (cell.size >= 2).then(|| {
+                    lat.id(cell.centre()) << USE_BITS | u64::from(cell.size.trailing_zeros() + 1)
+                });
+                (0..8)
+                    .map(move |k| lat.id(cell.corner(k)) << USE_BITS)
+                    .chain(centre)
             })
             .collect();
         pts.par_sort_unstable();
-        pts.dedup();
+        // Sorted, so each node's widest use comes last.
+        pts.dedup_by(|next, kept| {
+            let same = *next >> USE_BITS == *kept >> USE_BITS;
+            if same {
+                *kept = *next;
+            }
+            same
+        });
         let nodes = &self.nodes;
-        pts.retain(|&p| nodes.get(p).is_none());
+        pts.retain(|&p| nodes.get(p >> USE_BITS).is_none());
+        let h = lat.h;
         let vals: Vec<(f64, PhaseId)> = pts
             .par_iter()
-            .map(|&p| sampler.sample(lat.pos(p)))
+            .map(|&p| {
+                let reach = match p & USE_MASK {
+                    0 => CORNER_REACH_CELLS * h,
+                    code => SPLIT_FACTOR * h * (1u64 << (code - 1)) as f64,
+                };
+                sampler.sample_near(lat.pos(p >> USE_BITS), reach)
+            })
             .collect();
         self.nodes.reserve(pts.len());
         for (p, (phi, chi)) in pts.into_iter().zip(vals) {
-            self.nodes.insert(p, phi, chi);
+            self.nodes.insert(p >> USE_BITS, phi, chi);
         }
     }
 
