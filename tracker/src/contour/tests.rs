@@ -743,8 +743,8 @@ impl<F: Fn(DVec3) -> (f64, PhaseId) + Sync> PhaseSampler for NearOnly<F> {
 /// Far nodes keep a lower bound of at least 3 h.
 #[test]
 fn far_nodes_sampled_as_bounds_give_the_same_tree_and_mesh() {
-    let cases: [(usize, Box<dyn Fn(DVec3) -> (f64, PhaseId) + Sync>); 2] =
-        [(32, Box::new(sphere)), (24, Box::new(wedges(4)))];
+    type Shape = Box<dyn Fn(DVec3) -> (f64, PhaseId) + Sync>;
+    let cases: [(usize, Shape); 2] = [(32, Box::new(sphere)), (24, Box::new(wedges(4)))];
     for (n, f) in cases {
         let near = NearOnly {
             f: &f,
