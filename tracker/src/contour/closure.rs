@@ -14,31 +14,11 @@ use polyphase_grid::OUTSIDE;
 use rayon::prelude::*;
 
 use super::stencils::{Poly, VKey};
-use super::tree::{MdTree, LEAF};
+use super::tree::{Cell, MdTree, LEAF};
 
 impl MdTree {
-    /// Lattice ids of all leaf corners on the domain boundary, sorted.
-    fn boundary_corners(&self) -> Vec<u64> {
-        let lat = self.lattice;
-        let mut ids: Vec<u64> = self
-            .cells
-            .par_iter()
-            .filter(|c| c.child == LEAF)
-            .flat_map_iter(|c| {
-                (0..8)
-                    .map(move |k| c.corner(k))
-                    .filter(|p| lat.on_boundary(*p))
-                    .map(move |p| lat.id(p))
-            })
-            .collect();
-        ids.par_sort_unstable();
-        ids.dedup();
-        ids
-    }
-
     /// Boundary polygons of the single-phase leaves, in cell order.
     pub(crate) fn closure_polys(&self) -> Vec<Poly> {
-        let corners = self.boundary_corners();
         let lat = self.lattice;
         self.cells
             .par_iter()
@@ -52,19 +32,7 @@ impl MdTree {
                         if coord != side * lat.dims[axis] {
                             continue;
                         }
-                        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-                        let mut ring = Vec::with_capacity(4);
-                        let mut p = cell.min;
-                        p[axis] = coord;
-                        // Walk the perimeter: +u, +v, −u, −v.
-                        for (dir, sign) in [(u, 1i64), (v, 1), (u, -1), (v, -1)] {
-                            for step in 0..cell.edge[dir] {
-                                if step == 0 || corners.binary_search(&lat.id(p)).is_ok() {
-                                    ring.push(lat.id(p));
-                                }
-                                p[dir] = (p[dir] as i64 + sign) as u64;
-                            }
-                        }
+                        let ring = self.face_ring(cell, axis, coord);
                         // The ring turns e_u → e_v, so its normal is e_u × e_v = e_axis.
                         let flip = side == 0;
                         let labels = [OUTSIDE, cell.chi];
@@ -90,6 +58,46 @@ impl MdTree {
                 out
             })
             .collect()
+    }
+
+    /// Lattice ids of the leaf corners on the perimeter of the face of `cell` at coordinate
+    /// `coord` along `axis`, walked from its min corner along +u, +v, −u, −v (u, v the next
+    /// axes after `axis`): its 4 corners and the hanging nodes between them.
+    pub(crate) fn face_ring(&self, cell: &Cell, axis: usize, coord: u64) -> Vec<u64> {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let mut ring = Vec::with_capacity(4);
+        let mut p = cell.min;
+        p[axis] = coord;
+        for (dir, sign) in [(u, 1i64), (v, 1), (u, -1), (v, -1)] {
+            ring.push(self.lattice.id(p));
+            self.push_hanging(p, dir, sign, cell.edge[dir], &mut ring);
+            p[dir] = (p[dir] as i64 + sign * cell.edge[dir] as i64) as u64;
+        }
+        ring
+    }
+
+    /// Appends, in walking order, the hanging nodes (corners of smaller leaves) inside the
+    /// boundary leaf edge that starts at `p` and runs `len` (a power of two) cells along axis
+    /// `dir` in direction `sign`. Cells are dyadic, so a leaf corner inside the edge makes the
+    /// edge's midpoint one (the corner's cell lies in a neighbour cell of half the edge's
+    /// length, which has the midpoint as a corner on the edge): probing midpoints recursively
+    /// finds them all with one lookup per node found, plus one per empty half. A point on the
+    /// domain boundary is a leaf corner exactly when it is a stored node: every cell's corners
+    /// are sampled and are corners of its leaves, and the only other nodes, cell centres, lie
+    /// strictly inside their cells.
+    fn push_hanging(&self, p: [u64; 3], dir: usize, sign: i64, len: u64, ring: &mut Vec<u64>) {
+        if len < 2 {
+            return;
+        }
+        let mut mid = p;
+        mid[dir] = (p[dir] as i64 + sign * (len / 2) as i64) as u64;
+        let id = self.lattice.id(mid);
+        if self.nodes.get(id).is_none() {
+            return;
+        }
+        self.push_hanging(p, dir, sign, len / 2, ring);
+        ring.push(id);
+        self.push_hanging(mid, dir, sign, len / 2, ring);
     }
 
     /// Position of the centre of face `face` (axis·2 + side) of leaf `cell`.

@@ -59,12 +59,6 @@ impl Lattice {
     pub fn pos(&self, id: u64) -> DVec3 {
         self.pos_ijk(self.ijk(id))
     }
-
-    /// Is node `p` on the boundary of the grid box?
-    #[inline]
-    pub fn on_boundary(&self, p: [u64; 3]) -> bool {
-        (0..3).any(|a| p[a] == 0 || p[a] == self.dims[a])
-    }
 }
 
 /// Folded 128-bit multiply of a `u64` key: every output bit depends on every input bit.

@@ -209,6 +209,68 @@ fn shapes_cut_by_the_box_close_on_any_grid() {
 }
 
 #[test]
+fn boundary_rings_find_every_hanging_node() {
+    // The closure probes edge midpoints recursively instead of every lattice point of a
+    // leaf's boundary edges; on graded trees (3D and slabs, the sphere cut by the box) both
+    // must give the same rings, and some rings must have hanging nodes. With φ thirty times
+    // too large, cells split only where corner phases differ, so coarse leaves meet the
+    // finest (several hanging nodes per edge).
+    let grids = [
+        GridSpec {
+            origin: DVec3::new(0.2, 0.1, 0.25),
+            h: 0.04,
+            dims: [20, 16, 12],
+        },
+        GridSpec {
+            origin: DVec3::new(0.05, 0.02, 0.49),
+            h: 0.03,
+            dims: [32, 24, 2],
+        },
+        slab_grid(128),
+    ];
+    let (mut faces, mut hanging) = (0, 0);
+    let f = wedges(3);
+    let over = |x: DVec3| {
+        let (d, chi) = f(x);
+        (30.0 * d, chi)
+    };
+    let samplers: [&dyn PhaseSampler; 2] = [&f, &over];
+    for (grid, sampler) in grids.iter().flat_map(|g| samplers.map(|s| (g, s))) {
+        let tree = MdTree::build(grid, sampler);
+        let lat = tree.lattice;
+        for cell in tree.cells.iter().filter(|c| c.child == LEAF) {
+            for axis in 0..3 {
+                for side in 0..2u64 {
+                    let coord = cell.min[axis] + side * cell.edge[axis];
+                    if coord != side * lat.dims[axis] {
+                        continue;
+                    }
+                    let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                    let mut walked = Vec::new();
+                    let mut p = cell.min;
+                    p[axis] = coord;
+                    for (dir, sign) in [(u, 1i64), (v, 1), (u, -1), (v, -1)] {
+                        for step in 0..cell.edge[dir] {
+                            if step == 0 || tree.nodes.get(lat.id(p)).is_some() {
+                                walked.push(lat.id(p));
+                            }
+                            p[dir] = (p[dir] as i64 + sign) as u64;
+                        }
+                    }
+                    assert_eq!(tree.face_ring(cell, axis, coord), walked, "{grid:?}");
+                    faces += 1;
+                    hanging = hanging.max(walked.len() - 4);
+                }
+            }
+        }
+    }
+    assert!(
+        faces > 100 && hanging >= 4,
+        "{faces} faces, at most {hanging} hanging"
+    );
+}
+
+#[test]
 fn interface_through_grid_nodes_stays_valid() {
     // A box whose faces pass exactly through grid nodes (φ = 0 at nodes): crossings sit at the
     // ends of edges and are clamped to MARGIN, which must not create degenerate triangles.
