@@ -17,10 +17,11 @@ use super::stencils::{Poly, VKey};
 use super::tree::{Cell, MdTree, LEAF};
 
 impl MdTree {
-    /// Boundary polygons of the single-phase leaves, in cell order.
-    pub(crate) fn closure_polys(&self) -> Vec<Poly> {
+    /// Appends the boundary polygons of the single-phase leaves, in cell order.
+    pub(crate) fn closure_polys(&self, polys: &mut Vec<Poly>) {
         let lat = self.lattice;
-        self.cells
+        let closure = self
+            .cells
             .par_iter()
             .enumerate()
             .filter(|(_, c)| c.child == LEAF && !c.mixed)
@@ -56,8 +57,8 @@ impl MdTree {
                     }
                 }
                 out
-            })
-            .collect()
+            });
+        polys.par_extend(closure);
     }
 
     /// Lattice ids of the leaf corners on the perimeter of the face of `cell` at coordinate

@@ -9,6 +9,7 @@
 
 use glam::DVec3;
 use polyphase_grid::PhaseId;
+use rayon::iter::Either;
 use rayon::prelude::*;
 
 use super::bisect::{clamp_to_triangle, edge_crossing, junction, triple_point};
@@ -16,6 +17,37 @@ use super::sampler::PhaseSampler;
 use super::stencils::{corner_offset, Poly, Simplex, VKey, KUHN};
 use super::tree::MdTree;
 use crate::mesh::LabeledMesh;
+
+/// The polygons' distinct vertex keys, sorted: lattice nodes (the closure's, most of a
+/// slab's keys) sorted as plain ids, which is cheaper than sorting them among the others.
+struct VertexKeys {
+    nodes: Vec<u64>,
+    others: Vec<VKey>,
+    /// `nodes` as keys, then `others`: the sorted order, as `Node` is `VKey`'s first variant.
+    all: Vec<VKey>,
+}
+
+impl VertexKeys {
+    fn of(polys: &[Poly]) -> VertexKeys {
+        let (mut nodes, mut others): (Vec<u64>, Vec<VKey>) = polys
+            .par_iter()
+            .flat_map_iter(|p| p.verts.into_iter().take(p.len as usize))
+            .partition_map(|k| match k {
+                VKey::Node(n) => Either::Left(n),
+                k => Either::Right(k),
+            });
+        nodes.par_sort_unstable();
+        nodes.dedup();
+        others.par_sort_unstable();
+        others.dedup();
+        let all = nodes
+            .iter()
+            .map(|&n| VKey::Node(n))
+            .chain(others.iter().copied())
+            .collect();
+        VertexKeys { nodes, others, all }
+    }
+}
 
 impl MdTree {
     /// Multiphase marching tetrahedra with bisection on exact φ, χ, watertight, closed at the
@@ -26,13 +58,12 @@ impl MdTree {
             .par_iter()
             .flat_map_iter(|&c| self.cell_polys(c))
             .collect();
-        polys.extend(self.closure_polys());
-        let mut keys: Vec<VKey> = polys
-            .par_iter()
-            .flat_map_iter(|p| p.verts.into_iter().take(p.len as usize))
-            .collect();
-        keys.par_sort_unstable();
-        keys.dedup();
+        self.closure_polys(&mut polys);
+        let VertexKeys {
+            nodes: node_keys,
+            others: other_keys,
+            all: keys,
+        } = VertexKeys::of(&polys);
         // Triple points wait for the edge crossings: each is then kept inside the triangle of
         // its face's three crossings (paper 004 §5.2 finds it from them; Fig. 5's stencils
         // assume it there). A junction whose three angles are all below 180° (a 120° Y) lies
@@ -50,11 +81,14 @@ impl MdTree {
                 _ => self.vertex_position(k, sampler),
             })
             .collect();
-        let crossing = |a: u64, b: u64| {
-            keys.binary_search(&VKey::Edge(a, b))
+        let index = |k: &VKey| match k {
+            VKey::Node(n) => node_keys.binary_search(n).ok(),
+            _ => other_keys
+                .binary_search(k)
                 .ok()
-                .map(|i| vertices[i])
+                .map(|i| node_keys.len() + i),
         };
+        let crossing = |a: u64, b: u64| index(&VKey::Edge(a, b)).map(|i| vertices[i]);
         let triple_points: Vec<(usize, DVec3)> = keys
             .par_iter()
             .enumerate()
@@ -74,7 +108,7 @@ impl MdTree {
         for (i, x) in triple_points {
             vertices[i] = x;
         }
-        let id = |k: &VKey| keys.binary_search(k).map_or(0, |i| i as u32);
+        let id = |k: &VKey| index(k).map_or(0, |i| i as u32);
         let tris: Vec<([u32; 3], [PhaseId; 2])> = polys
             .par_iter()
             .flat_map_iter(|p| {
