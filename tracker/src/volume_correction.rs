@@ -47,10 +47,13 @@ pub mod components;
 pub mod succession;
 
 use std::collections::{BTreeMap, HashMap};
+use std::hash::BuildHasherDefault;
 
 use glam::{DVec3, I64Vec3};
 use polyphase_grid::{PhaseId, OUTSIDE};
+use rayon::prelude::*;
 
+use crate::front::broadphase::CellHasher;
 use crate::mesh::LabeledMesh;
 use components::{root, union, Components, NONE};
 
@@ -257,14 +260,18 @@ pub fn junction_weights(
         }
     }
     let cell = |x: DVec3| (x / (2.0 * reach)).floor().as_i64vec3();
-    let mut junctions: HashMap<I64Vec3, Vec<DVec3>> = HashMap::new();
+    let mut junctions: HashMap<I64Vec3, Vec<DVec3>, BuildHasherDefault<CellHasher>> =
+        HashMap::default();
     for (v, s) in seen.iter().enumerate() {
         if !s.contains(&OUTSIDE) {
             let x = mesh.vertices[v];
             junctions.entry(cell(x)).or_default().push(x);
         }
     }
+    // Each weight is a function of its triangle alone (a minimum), so the parallel map
+    // gives the same bits on any number of threads.
     let mut weights: Vec<f64> = (0..count)
+        .into_par_iter()
         .map(|t| {
             if junctions.is_empty() || !interface(t) {
                 return 1.0;
