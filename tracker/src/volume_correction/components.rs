@@ -13,6 +13,7 @@
 
 use glam::DVec3;
 use polyphase_grid::{PhaseId, OUTSIDE};
+use rayon::prelude::*;
 
 use crate::mesh::LabeledMesh;
 
@@ -144,16 +145,18 @@ impl Pieces {
         };
         // (edge, phase, half-face) for every edge of every half-face sought; sorted, runs of the
         // same edge and phase are joined.
-        let mut edges: Vec<(u32, u32, PhaseId, u32)> = Vec::new();
-        for half in 0..halves {
-            if let Some(phase) = phase_of(half) {
+        // Every tuple is distinct (one half-face each), so the parallel unstable sort's order
+        // is the one total order.
+        let mut edges: Vec<(u32, u32, PhaseId, u32)> = (0..halves)
+            .into_par_iter()
+            .flat_map_iter(|half| {
                 let [a, b, c] = mesh.triangles[half / 2];
-                for (x, y) in [(a, b), (b, c), (c, a)] {
-                    edges.push((x.min(y), x.max(y), phase, half as u32));
-                }
-            }
-        }
-        edges.sort_unstable();
+                phase_of(half).into_iter().flat_map(move |phase| {
+                    [(a, b), (b, c), (c, a)].map(|(x, y)| (x.min(y), x.max(y), phase, half as u32))
+                })
+            })
+            .collect();
+        edges.par_sort_unstable();
         let mut parent: Vec<u32> = (0..halves as u32).collect();
         for pair in edges.windows(2) {
             let ((a0, b0, p0, h0), (a1, b1, p1, h1)) = (pair[0], pair[1]);
