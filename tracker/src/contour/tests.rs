@@ -164,12 +164,11 @@ fn wedges_are_closed_with_right_volumes() {
     }
 }
 
-#[test]
-fn shapes_cut_by_the_box_close_on_any_grid() {
-    // Non-cubic dims (root blocks B = 4; slabs with B = 2, and with B = 8 and cells of size
-    // 4 and 8 spanning the slab's thickness), an offset origin, and the cut sphere crossing
-    // the box so that 2- and 3-label boundary faces occur.
-    let grids = [
+/// Non-cubic dims (root blocks B = 4; slabs with B = 2, and with B = 8 and cells of size
+/// 4 and 8 spanning the slab's thickness), an offset origin, and the sphere (C, R) crossing
+/// the box so that 2- and 3-label boundary faces occur.
+fn grids_cutting_the_sphere() -> [GridSpec; 3] {
+    [
         GridSpec {
             origin: DVec3::new(0.2, 0.1, 0.25),
             h: 0.04,
@@ -185,8 +184,12 @@ fn shapes_cut_by_the_box_close_on_any_grid() {
             h: 0.03,
             dims: [32, 24, 2],
         },
-    ];
-    for grid in grids {
+    ]
+}
+
+#[test]
+fn shapes_cut_by_the_box_close_on_any_grid() {
+    for grid in grids_cutting_the_sphere() {
         for k in [1, 3, 4] {
             let f = wedges(k);
             let tree = MdTree::build(&grid, &f);
@@ -215,19 +218,8 @@ fn boundary_rings_find_every_hanging_node() {
     // must give the same rings, and some rings must have hanging nodes. With φ thirty times
     // too large, cells split only where corner phases differ, so coarse leaves meet the
     // finest (several hanging nodes per edge).
-    let grids = [
-        GridSpec {
-            origin: DVec3::new(0.2, 0.1, 0.25),
-            h: 0.04,
-            dims: [20, 16, 12],
-        },
-        GridSpec {
-            origin: DVec3::new(0.05, 0.02, 0.49),
-            h: 0.03,
-            dims: [32, 24, 2],
-        },
-        slab_grid(128),
-    ];
+    let mut grids = grids_cutting_the_sphere().to_vec();
+    grids.push(slab_grid(128));
     let (mut faces, mut hanging) = (0, 0);
     let f = wedges(3);
     let over = |x: DVec3| {
