@@ -174,6 +174,9 @@ pub(crate) fn contour_row(scene: &polyphase_scenes::Scene, samples: usize) -> Co
             .find(|(n, _)| *n == name)
             .map_or(0.0, |s| s.1)
     };
+    // Table 1's redistancing: the new mesh's exact query structure, then the distances
+    // (before anything reads φ, which would redistance first).
+    let redistance = tracker.redistance();
     let h = scene.grid.h;
     let acc = metrics::indicator_accuracy(
         scene.grid.origin,
@@ -184,7 +187,11 @@ pub(crate) fn contour_row(scene: &polyphase_scenes::Scene, samples: usize) -> Co
         |x| scene.initial.phase(x),
         |x| tracker.query().distance(x),
     );
-    let (b, c, d) = (stage("build"), stage("contour"), stage("redistance"));
+    let (b, c, d) = (
+        stage("build"),
+        stage("contour"),
+        stage("query") + redistance,
+    );
     ContourRow {
         res: scene.file.resolution,
         cells: stats.cells,

@@ -104,9 +104,13 @@ fn read_row(dir: &Path, res: i64, solver_res: Option<i64>) -> Result<Row> {
 }
 
 /// Stages grouped into the table's columns: tracker, solver, output.
-const TRACKER: [&str; 5] = [
+const TRACKER: [&str; 9] = [
     "build",
     "contour",
+    "components",
+    "specks",
+    "succession",
+    "query",
     "redistance",
     "sample",
     "interface_velocity",

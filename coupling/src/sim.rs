@@ -395,7 +395,12 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         }
         let lag = interface_lag(&seen, &self.tracker.sample(&grid));
         report.interface_lag = report.interface_lag.max(lag);
-        for &(name, secs) in &tracked.stages {
+        // The samples above read φ, which the tracker may compute on demand: count that too.
+        for &(name, secs) in tracked
+            .stages
+            .iter()
+            .chain(&self.tracker.take_deferred_stages())
+        {
             report.add(name, secs);
         }
         report.cells = tracked.cells;

@@ -1,8 +1,10 @@
 //! The semi-Lagrangian contouring tracker of paper 004 (§3): each step backtraces every point
 //! the adaptive tree needs through the velocity field, reads φ and χ exactly off the previous
-//! mesh at the departure point, contours the result into a new mesh, and redistances.
+//! mesh at the departure point, contours the result into a new mesh, and redistances when φ
+//! is first read.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::DVec3;
@@ -21,12 +23,21 @@ use crate::volume_correction::{
     carried_loss, first_aim, missed, reaim, VolumeShift, MAX_RETRIES, MISS_TOLERANCE,
 };
 
-/// Tracker state: the current mesh, its exact query structure and the redistanced tree.
+/// Tracker state: the current mesh, its exact query structure and the tree it was contoured
+/// from, with the tree's redistanced φ once something has read φ.
 pub struct ContourTracker {
     grid: GridSpec,
     n_phases: usize,
     background: PhaseId,
+    /// The tree as built: χ everywhere, φ as sampled while building.
     tree: MdTree,
+    /// The tree's node distances redistanced to `mesh` (paper 004 §6.4), computed on the first
+    /// read of φ ([`ContourTracker::redistance`]): the next step reads only χ off the tree and
+    /// the mesh, so a passive run that writes meshes never needs them.
+    dist: OnceLock<Vec<f64>>,
+    /// Nanoseconds spent redistancing since [`InterfaceTracker::take_deferred_stages`] last
+    /// reported them.
+    redistance_nanos: AtomicU64,
     mesh: LabeledMesh,
     query: MeshQuery,
     /// Phase volumes each step's mesh is corrected back to; `None` turns the correction off.
@@ -90,6 +101,8 @@ impl ContourTracker {
             n_phases,
             background,
             tree,
+            dist: OnceLock::new(),
+            redistance_nanos: AtomicU64::new(0),
             mesh,
             query,
             volume_targets: None,
@@ -102,8 +115,8 @@ impl ContourTracker {
         }
     }
 
-    /// A tracker from the saved state of another (a checkpoint): its mesh, its redistanced
-    /// tree, the phases' volume targets, and its components' targets and carried loss
+    /// A tracker from the saved state of another (a checkpoint): its mesh, its tree (the
+    /// distances are redistanced again when read, to the same values), the phases' volume targets, and its components' targets and carried loss
     /// ([`ContourTracker::component_targets`], [`ContourTracker::carried_loss`]). It continues
     /// exactly as the one they were taken from. Component state that does not fit the mesh's
     /// components (another count) is started afresh, as [`ContourTracker::set_volume_targets`]
@@ -133,9 +146,21 @@ impl ContourTracker {
         tracker
     }
 
-    /// The redistanced tree that answers [`ContourTracker::phi_chi`] away from the interface.
-    pub fn tree(&self) -> &MdTree {
-        &self.tree
+    /// Redistances the tree to the current mesh (paper 004 §6.4, Table 1's third stage) unless
+    /// that was done already; returns the seconds it took (0 when done before). The first
+    /// read of φ calls it.
+    pub fn redistance(&self) -> f64 {
+        let mut secs = 0.0;
+        self.dist.get_or_init(|| {
+            let started = Instant::now();
+            let dist = self.tree.redistanced(&|x| self.query.distance(x));
+            let elapsed = started.elapsed();
+            secs = elapsed.as_secs_f64();
+            self.redistance_nanos
+                .fetch_add(elapsed.as_nanos() as u64, Ordering::Relaxed);
+            dist
+        });
+        secs
     }
 
     /// Sets the per-phase volumes every step's mesh is corrected back to (see
@@ -215,7 +240,9 @@ impl ContourTracker {
     /// φ is exact within the redistanced band; beyond it, only at least about 3 h (the tree's
     /// build samples far nodes no more exactly: [`PhaseSampler::sample_near`]).
     pub fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
-        self.tree.sample(x).unwrap_or_else(|| {
+        self.redistance();
+        let dist = self.dist.get().expect("redistance fills the distances");
+        self.tree.sample_with(dist, x).unwrap_or_else(|| {
             let n = self.query.query(x);
             (n.distance, n.phase)
         })
@@ -227,10 +254,12 @@ impl ContourTracker {
     }
 }
 
-/// Build, contour, redistance: the three timed stages of paper 004 Table 1. With `specks`
-/// (the phases' count), the contoured mesh's components are found and its specks removed
-/// before it is redistanced ([`remove_specks`], bound [`SPECK_CELLS`] cells, counted in the
-/// stats' events), and the components of the mesh are returned for the volume correction.
+/// Build, contour, and the new mesh's query structure: the first two timed stages of paper 004
+/// Table 1 (the third, redistancing, waits for a read of φ: [`ContourTracker::redistance`]).
+/// With `specks` (the phases' count), the contoured mesh's components are found and its
+/// specks removed before the query is built ([`remove_specks`], bound [`SPECK_CELLS`] cells,
+/// counted in the stats' events), and the components of the mesh are returned for the volume
+/// correction.
 fn rebuild(
     grid: &GridSpec,
     sampler: &dyn PhaseSampler,
@@ -238,7 +267,7 @@ fn rebuild(
     specks: Option<usize>,
 ) -> Built {
     let t0 = Instant::now();
-    let mut tree = MdTree::build(grid, sampler);
+    let tree = MdTree::build(grid, sampler);
     let t1 = Instant::now();
     let mut mesh = tree.contour(sampler);
     let t2 = Instant::now();
@@ -259,8 +288,7 @@ fn rebuild(
     });
     let t3 = Instant::now();
     let query = MeshQuery::new(&mesh, background);
-    tree.redistance(&|x| query.distance(x));
-    stages.push(("redistance", t3.elapsed().as_secs_f64()));
+    stages.push(("query", t3.elapsed().as_secs_f64()));
     let stats = StepStats {
         stages,
         cells: tree.cell_count(),
@@ -486,6 +514,7 @@ impl InterfaceTracker for ContourTracker {
             self.components = components;
         }
         self.tree = tree;
+        self.dist = OnceLock::new();
         self.mesh = mesh;
         self.query = query;
         Ok(stats)
@@ -497,6 +526,13 @@ impl InterfaceTracker for ContourTracker {
 
     fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
         ContourTracker::phi_chi(self, x)
+    }
+
+    fn take_deferred_stages(&self) -> Vec<(&'static str, f64)> {
+        match self.redistance_nanos.swap(0, Ordering::Relaxed) {
+            0 => Vec::new(),
+            nanos => vec![("redistance", nanos as f64 * 1e-9)],
+        }
     }
 
     fn mesh(&self) -> &LabeledMesh {

@@ -24,6 +24,12 @@ impl MdTree {
     /// interface cells, fast marching outward over the finest level (see the module doc for
     /// the band); χ unchanged.
     pub fn redistance(&mut self, exact_distance: &(dyn Fn(DVec3) -> f64 + Sync)) {
+        self.dist = self.redistanced(exact_distance);
+    }
+
+    /// The node distances [`MdTree::redistance`] would leave, without changing the tree: a
+    /// tracker keeps them beside it and computes them only when φ is read.
+    pub fn redistanced(&self, exact_distance: &(dyn Fn(DVec3) -> f64 + Sync)) -> Vec<f64> {
         let lat = self.lattice;
         let unit = |c: &&Cell| c.child == LEAF && c.size == 1;
         // Finest-level nodes, numbered in node-store (insertion, so deterministic) order.
@@ -101,11 +107,13 @@ impl MdTree {
                 }
             }
         }
+        let mut dist = self.dist.clone();
         for (&s, &v) in slots.iter().zip(&value) {
             if v.is_finite() {
-                self.dist[s] = v;
+                dist[s] = v;
             }
         }
+        dist
     }
 }
 

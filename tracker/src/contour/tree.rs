@@ -409,6 +409,12 @@ impl MdTree {
     /// leaf has uniform χ, `None` in interface cells (the caller then queries the mesh exactly).
     /// Points outside the grid box are clamped to it.
     pub fn sample(&self, x: DVec3) -> Option<(f64, PhaseId)> {
+        self.sample_with(&self.dist, x)
+    }
+
+    /// [`MdTree::sample`] with φ interpolated from `dist` (one value per node slot, as
+    /// [`MdTree::redistanced`] returns) instead of the tree's own.
+    pub fn sample_with(&self, dist: &[f64], x: DVec3) -> Option<(f64, PhaseId)> {
         let lat = &self.lattice;
         let hi = DVec3::new(lat.dims[0] as f64, lat.dims[1] as f64, lat.dims[2] as f64);
         let u = ((x - lat.origin) / lat.h).clamp(DVec3::ZERO, hi);
@@ -425,7 +431,7 @@ impl MdTree {
             let w = (0..3).fold(1.0, |w, a| {
                 w * if (k >> a) & 1 == 1 { t[a] } else { 1.0 - t[a] }
             });
-            phi += w * self.dist[cell.slots[k] as usize];
+            phi += w * dist[cell.slots[k] as usize];
         }
         Some((phi, cell.chi))
     }

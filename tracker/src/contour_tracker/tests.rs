@@ -1,4 +1,4 @@
-//! The departure sampler's bounded answers against its full ones.
+//! The departure sampler's bounded answers against its full ones, and φ redistanced on demand.
 
 use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;
@@ -9,6 +9,7 @@ use polyphase_grid::{GridSpec, PhaseId, VelocityField};
 use super::{ContourTracker, Departure};
 use crate::contour::PhaseSampler;
 use crate::sampling::SplitMix64;
+use crate::tracker::InterfaceTracker;
 use crate::volume_correction::VolumeShift;
 
 /// Enright's deformation field (time-independent here): it stretches and folds.
@@ -94,4 +95,43 @@ fn far_samples_keep_the_phase_and_bound_the_distance() {
         assert!(bounded > 1000, "{bounded} bounded answers");
     }
     assert!(!bad.into_inner());
+}
+
+/// A step redistances nothing until φ is read; the first read redistances (its time then
+/// reported once, as a deferred stage) and answers, to the bit, what redistancing the step's
+/// tree eagerly to its mesh gives.
+#[test]
+fn phi_is_redistanced_on_the_first_read_as_eagerly() {
+    let grid = GridSpec {
+        origin: DVec3::ZERO,
+        h: 1.0 / 24.0,
+        dims: [24; 3],
+    };
+    let (mut tracker, _) = ContourTracker::new(grid, &cut_ball, 3, 0);
+    let stats = tracker.advance(&Enright, 0.0, 4.0 * grid.h).unwrap();
+    assert!(stats.stages.iter().all(|(name, _)| *name != "redistance"));
+    assert!(
+        tracker.take_deferred_stages().is_empty(),
+        "nothing read φ yet"
+    );
+    let mut eager = tracker.tree.clone();
+    eager.redistance(&|x| tracker.query.distance(x));
+    let mut rng = SplitMix64(11);
+    let mut from_tree = 0;
+    for _ in 0..4000 {
+        let x = rng.point(grid.origin, grid.upper());
+        let (phi, chi) = tracker.phi_chi(x);
+        if let Some((p, c)) = eager.sample(x) {
+            assert_eq!((phi.to_bits(), chi), (p.to_bits(), c), "at {x}");
+            from_tree += 1;
+        }
+    }
+    assert!(from_tree > 3000, "{from_tree} answers off the tree");
+    let deferred = tracker.take_deferred_stages();
+    assert!(
+        matches!(deferred[..], [("redistance", s)] if s > 0.0),
+        "{deferred:?}"
+    );
+    assert_eq!(tracker.redistance(), 0.0, "redistanced once");
+    assert!(tracker.take_deferred_stages().is_empty(), "reported once");
 }
