@@ -104,14 +104,13 @@ fn read_row(dir: &Path, res: i64, solver_res: Option<i64>) -> Result<Row> {
 }
 
 /// Stages grouped into the table's columns: tracker, solver, output.
-const TRACKER: [&str; 9] = [
+const TRACKER: [&str; 8] = [
     "build",
     "contour",
     "components",
     "specks",
     "succession",
     "query",
-    "redistance",
     "sample",
     "interface_velocity",
 ];
@@ -126,7 +125,7 @@ fn table(rows: &[Row]) -> String {
     let _ = writeln!(
         s,
         "{:>5} {:>6} {:>6} {:>6} {:>8} {:>6} | {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} | {:>7} {:>5}",
-        "res", "solver", "frames", "steps", "wall s", "start", "build", "contour", "redist",
+        "res", "solver", "frames", "steps", "wall s", "start", "build", "contour", "query",
         "tracker", "press", "visc", "solver", "write", "peak MB", "CPU"
     );
     for r in rows {
@@ -145,7 +144,7 @@ fn table(rows: &[Row]) -> String {
             (r.wall - covered).max(0.0),
             per(stage("build")),
             per(stage("contour")),
-            per(stage("redistance")),
+            per(stage("query")),
             per(group(&TRACKER)),
             per(stage("pressure")),
             per(stage("viscosity")),
@@ -174,7 +173,7 @@ mod tests {
             stages: vec![
                 ("build".into(), 2.0),
                 ("contour".into(), 1.0),
-                ("redistance".into(), 1.0),
+                ("query".into(), 1.0),
                 ("pressure".into(), 2.0),
                 ("viscosity".into(), 1.0),
                 ("write".into(), 0.4),
@@ -190,7 +189,7 @@ mod tests {
             .split_whitespace()
             .collect();
         // 10 s wall, 7.4 s in stages: 2.6 s start-up; stages over 4 frames; tracker = build +
-        // contour + redistance = 4 s (1 s a frame), solver = pressure + viscosity = 3 s.
+        // contour + query = 4 s (1 s a frame), solver = pressure + viscosity = 3 s.
         assert_eq!(&cells[..6], ["64", "32", "4", "40", "10.0", "2.6"]);
         assert_eq!(
             &cells[7..15],

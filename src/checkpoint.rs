@@ -1,6 +1,6 @@
 //! The checkpoint a run writes at every frame end (`DIR/checkpoint.bin`), from which
 //! `polyphase resume` continues bit for bit: the tracker's snapshot behind a tag byte of its
-//! kind (the contouring tracker's mesh, redistanced tree, volume targets and carried volume
+//! kind (the contouring tracker's mesh, tree, volume targets and carried volume
 //! loss; the front tracker's [`FrontState`]), the solver's state, time and step count as exact
 //! f64 bits, plus the run's running totals for the summary. Little-endian binary: magic, format
 //! version, body, FNV-1a checksum of all bytes before it, so a truncated or damaged file is
@@ -17,7 +17,7 @@ use polyphase_tracker::{ply, LabeledMesh, MdTree, TrackerSnapshot};
 pub const FILE: &str = "checkpoint.bin";
 
 const MAGIC: &[u8; 8] = b"PPHASECK";
-const VERSION: u32 = 5;
+const VERSION: u32 = 6;
 
 /// Tracker kind tags, the first byte of the tracker's part of the body.
 const CONTOUR: u8 = 0;

@@ -141,13 +141,6 @@ fn track<T: InterfaceTracker>(
                 .stages
                 .push(("slab_images", start.elapsed().as_secs_f64()));
         }
-        // Reads of φ (the slab images) redistance the tracker on demand: that time is its own.
-        let deferred = StepStats {
-            stages: tracker.take_deferred_stages(),
-            ..StepStats::default()
-        };
-        summary.add_step(&deferred);
-        accumulate(&mut stats, &deferred);
         let mut line = frame_line(frame, time, steps, &stats, &tracker, scene)?;
         if let (true, Some(initial_mesh)) = (frame == frames, initial_mesh) {
             add_period_errors(&mut line, &tracker, initial_mesh, &reference, &names, scene);

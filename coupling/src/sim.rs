@@ -395,12 +395,7 @@ impl<T: InterfaceTracker> CoupledSim<T> {
         }
         let lag = interface_lag(&seen, &self.tracker.sample(&grid));
         report.interface_lag = report.interface_lag.max(lag);
-        // The samples above read φ, which the tracker may compute on demand: count that too.
-        for &(name, secs) in tracked
-            .stages
-            .iter()
-            .chain(&self.tracker.take_deferred_stages())
-        {
+        for &(name, secs) in &tracked.stages {
             report.add(name, secs);
         }
         report.cells = tracked.cells;

@@ -1,10 +1,10 @@
 //! The semi-Lagrangian contouring tracker of paper 004 (§3): each step backtraces every point
 //! the adaptive tree needs through the velocity field, reads φ and χ exactly off the previous
-//! mesh at the departure point, contours the result into a new mesh, and redistances when φ
-//! is first read.
+//! mesh at the departure point, and contours the result into a new mesh. φ is then read
+//! exactly off the new mesh where asked for, which replaces §6.4's redistancing
+//! ([`ContourTracker::phi_chi`]).
 
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::OnceLock;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use glam::DVec3;
@@ -24,20 +24,13 @@ use crate::volume_correction::{
 };
 
 /// Tracker state: the current mesh, its exact query structure and the tree it was contoured
-/// from, with the tree's redistanced φ once something has read φ.
+/// from.
 pub struct ContourTracker {
     grid: GridSpec,
     n_phases: usize,
     background: PhaseId,
     /// The tree as built: χ everywhere, φ as sampled while building.
     tree: MdTree,
-    /// The tree's node distances redistanced to `mesh` (paper 004 §6.4), computed on the first
-    /// read of φ ([`ContourTracker::redistance`]): the next step reads only χ off the tree and
-    /// the mesh, so a passive run that writes meshes never needs them.
-    dist: OnceLock<Vec<f64>>,
-    /// Nanoseconds spent redistancing since [`InterfaceTracker::take_deferred_stages`] last
-    /// reported them.
-    redistance_nanos: AtomicU64,
     mesh: LabeledMesh,
     query: MeshQuery,
     /// Phase volumes each step's mesh is corrected back to; `None` turns the correction off.
@@ -70,6 +63,13 @@ pub const DEFAULT_TRAVEL_CELLS: f64 = 8.0;
 /// contouring's fragments of a torn sheet.
 pub const SPECK_CELLS: f64 = 1.0;
 
+/// How far (finest cells) [`ContourTracker::phi_chi`] reads φ exactly off the mesh: the band
+/// §6.4's fast marching covered (the tree's unit cells reach about 6 cells from the
+/// interface), and more than the solver reads exactly (face fractions and crossings between
+/// cells of different phases, at most one solver cell away; solver cells are 1–4 tracker
+/// cells in the built-in scenes).
+pub const PHI_REACH_CELLS: f64 = 6.0;
+
 impl ContourTracker {
     /// Builds the first mesh from exact initial φ, χ (paper 004 §7.2: "the tree was initially
     /// built with exact functions"). `background` is the phase everywhere when no interface exists.
@@ -101,8 +101,6 @@ impl ContourTracker {
             n_phases,
             background,
             tree,
-            dist: OnceLock::new(),
-            redistance_nanos: AtomicU64::new(0),
             mesh,
             query,
             volume_targets: None,
@@ -115,8 +113,7 @@ impl ContourTracker {
         }
     }
 
-    /// A tracker from the saved state of another (a checkpoint): its mesh, its tree (the
-    /// distances are redistanced again when read, to the same values), the phases' volume targets, and its components' targets and carried loss
+    /// A tracker from the saved state of another (a checkpoint): its mesh, its tree, the phases' volume targets, and its components' targets and carried loss
     /// ([`ContourTracker::component_targets`], [`ContourTracker::carried_loss`]). It continues
     /// exactly as the one they were taken from. Component state that does not fit the mesh's
     /// components (another count) is started afresh, as [`ContourTracker::set_volume_targets`]
@@ -144,23 +141,6 @@ impl ContourTracker {
             tracker.carried_loss = carried_loss;
         }
         tracker
-    }
-
-    /// Redistances the tree to the current mesh (paper 004 §6.4, Table 1's third stage) unless
-    /// that was done already; returns the seconds it took (0 when done before). The first
-    /// read of φ calls it.
-    pub fn redistance(&self) -> f64 {
-        let mut secs = 0.0;
-        self.dist.get_or_init(|| {
-            let started = Instant::now();
-            let dist = self.tree.redistanced(&|x| self.query.distance(x));
-            let elapsed = started.elapsed();
-            secs = elapsed.as_secs_f64();
-            self.redistance_nanos
-                .fetch_add(elapsed.as_nanos() as u64, Ordering::Relaxed);
-            dist
-        });
-        secs
     }
 
     /// Sets the per-phase volumes every step's mesh is corrected back to (see
@@ -236,16 +216,24 @@ impl ContourTracker {
         &self.grid
     }
 
-    /// φ, χ at a point: from the tree where its leaf is uniform, else off the mesh. χ is exact;
-    /// φ is exact within the redistanced band; beyond it, only at least about 3 h (the tree's
-    /// build samples far nodes no more exactly: [`PhaseSampler::sample_near`]).
+    /// φ, χ at a point. χ from the tree where the point's leaf is uniform, else off the mesh:
+    /// exact either way. φ off the mesh, exact, wherever an interface lies within
+    /// [`PHI_REACH_CELLS`] cells; farther, the tree's interpolated φ but at least the reach
+    /// (the build samples far nodes only that far: [`PhaseSampler::sample_near`]). This
+    /// replaces paper 004 §6.4's fast marching outward from exact seeds (ARCHITECTURE.md
+    /// "Departures from the original design"): every φ within the reach is exact, not first order, and no
+    /// step pays for distances nobody reads (a 3D passive run reads none).
     pub fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
-        self.redistance();
-        let dist = self.dist.get().expect("redistance fills the distances");
-        self.tree.sample_with(dist, x).unwrap_or_else(|| {
+        let Some((tree_phi, chi)) = self.tree.sample(x) else {
             let n = self.query.query(x);
-            (n.distance, n.phase)
-        })
+            return (n.distance, n.phase);
+        };
+        let reach = PHI_REACH_CELLS * self.grid.h;
+        let phi = self
+            .query
+            .query_within(x, reach)
+            .map_or(tree_phi.max(reach), |n| n.distance);
+        (phi, chi)
     }
 
     /// The exact query structure of the current mesh.
@@ -254,12 +242,11 @@ impl ContourTracker {
     }
 }
 
-/// Build, contour, and the new mesh's query structure: the first two timed stages of paper 004
-/// Table 1 (the third, redistancing, waits for a read of φ: [`ContourTracker::redistance`]).
-/// With `specks` (the phases' count), the contoured mesh's components are found and its
-/// specks removed before the query is built ([`remove_specks`], bound [`SPECK_CELLS`] cells,
-/// counted in the stats' events), and the components of the mesh are returned for the volume
-/// correction.
+/// Build, contour, and the new mesh's query structure: paper 004 Table 1's stages, the query
+/// in place of redistancing ([`ContourTracker::phi_chi`]). With `specks` (the phases' count),
+/// the contoured mesh's components are found and its specks removed before the query is built
+/// ([`remove_specks`], bound [`SPECK_CELLS`] cells, counted in the stats' events), and the
+/// components of the mesh are returned for the volume correction.
 fn rebuild(
     grid: &GridSpec,
     sampler: &dyn PhaseSampler,
@@ -514,7 +501,6 @@ impl InterfaceTracker for ContourTracker {
             self.components = components;
         }
         self.tree = tree;
-        self.dist = OnceLock::new();
         self.mesh = mesh;
         self.query = query;
         Ok(stats)
@@ -526,13 +512,6 @@ impl InterfaceTracker for ContourTracker {
 
     fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
         ContourTracker::phi_chi(self, x)
-    }
-
-    fn take_deferred_stages(&self) -> Vec<(&'static str, f64)> {
-        match self.redistance_nanos.swap(0, Ordering::Relaxed) {
-            0 => Vec::new(),
-            nanos => vec![("redistance", nanos as f64 * 1e-9)],
-        }
     }
 
     fn mesh(&self) -> &LabeledMesh {

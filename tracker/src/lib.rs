@@ -10,7 +10,6 @@ pub mod mesh;
 pub mod metrics;
 pub mod ply;
 pub mod query;
-pub mod redistance;
 pub mod sampling;
 pub mod snapshot;
 pub mod specks;

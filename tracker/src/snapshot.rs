@@ -8,7 +8,7 @@ use crate::mesh::LabeledMesh;
 /// Everything a tracker needs to continue exactly where it stopped.
 #[derive(Clone, Debug)]
 pub enum TrackerSnapshot {
-    /// The contouring tracker: its mesh, the redistanced tree that answers φ, χ away from the
+    /// The contouring tracker: its mesh, the tree that answers χ (and far φ) away from the
     /// interface, the volume-correction targets (per phase, and per component of the mesh)
     /// and each component's loss carried into the next step.
     Contour {

@@ -88,12 +88,6 @@ pub trait InterfaceTracker: Send + Sync {
     ) -> PhaseField {
         PhaseField::from_cell_centres(grid, |x| self.phi_chi(departure_point(velocity, x, t, dt)))
     }
-    /// (stage, seconds) spent since the last call in stages a tracker runs on demand rather
-    /// than in [`InterfaceTracker::advance`] (the contouring tracker redistances on the first
-    /// read of φ); the run loops add them to their timings. None by default.
-    fn take_deferred_stages(&self) -> Vec<(&'static str, f64)> {
-        Vec::new()
-    }
     /// The current interface mesh, closed at the domain boundary.
     fn mesh(&self) -> &LabeledMesh;
     /// The whole state for a checkpoint; `None` for a tracker whose runs cannot be resumed
@@ -132,9 +126,6 @@ impl<T: InterfaceTracker + ?Sized> InterfaceTracker for Box<T> {
     }
     fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
         (**self).phi_chi(x)
-    }
-    fn take_deferred_stages(&self) -> Vec<(&'static str, f64)> {
-        (**self).take_deferred_stages()
     }
     fn sample(&self, grid: &GridSpec) -> PhaseField {
         (**self).sample(grid)

@@ -160,7 +160,7 @@ pub const MAX_AIM_FRACTION: f64 = 0.25;
 /// contoured again, from the same previous mesh, with the aim moved by the miss.
 pub const MISS_TOLERANCE: f64 = 0.01;
 
-/// Retries a step may take (each costs one more build, contour and redistance).
+/// Retries a step may take (each costs one more build, contour and query structure).
 pub const MAX_RETRIES: usize = 2;
 
 /// The volumes a step's correction aims for: each component's target plus the loss carried from the

@@ -1,10 +1,11 @@
 //! The semi-Lagrangian contouring tracker's spatial part (paper 004 §5–§6): the adaptive
 //! multiphase distance (MD) tree, multiphase marching tetrahedra with bisection, and the
-//! closure of the mesh at the domain boundary. Redistancing lives in `crate::redistance`.
+//! closure of the mesh at the domain boundary.
 //!
-//! One step: [`MdTree::build`] with a [`PhaseSampler`] (backtrace + exact mesh query),
-//! [`MdTree::contour`] with the same sampler, then `MdTree::redistance` with the exact
-//! distance to the new mesh; [`MdTree::sample`] then serves φ, χ away from the interface.
+//! One step: [`MdTree::build`] with a [`PhaseSampler`] (backtrace + exact mesh query), then
+//! [`MdTree::contour`] with the same sampler; [`MdTree::sample`] then serves χ away from the
+//! interface (and φ as built). §6.4's redistancing is replaced by exact reads off the new
+//! mesh where φ is asked for ([`crate::ContourTracker::phi_chi`]).
 //!
 //! Decisions (details in each file):
 //! - `nodes`: φ, χ live in one open-addressing table keyed by the linear lattice node id

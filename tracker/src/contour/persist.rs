@@ -57,10 +57,6 @@ impl MdTree {
             .chi
             .iter()
             .for_each(|c| w.extend_from_slice(&c.to_le_bytes()));
-        w.extend_from_slice(&(self.dist.len() as u64).to_le_bytes());
-        self.dist
-            .iter()
-            .for_each(|d| w.extend_from_slice(&d.to_bits().to_le_bytes()));
         w.extend_from_slice(&(self.interface.len() as u64).to_le_bytes());
         self.interface
             .iter()
@@ -113,10 +109,6 @@ impl MdTree {
         for (&key, &phi) in keys.iter().zip(&phi) {
             nodes.insert(key, phi, u16::from_le_bytes(r.take()?));
         }
-        let n_dist = r.count(8)?;
-        let dist = (0..n_dist)
-            .map(|_| r.f64())
-            .collect::<Result<Vec<_>, _>>()?;
         let n_interface = r.count(4)?;
         let interface = (0..n_interface)
             .map(|_| r.u32())
@@ -135,7 +127,7 @@ impl MdTree {
         for (i, c) in cells.iter().enumerate() {
             let children_fit =
                 c.child == LEAF || (c.child as usize) + c.child_count() as usize <= cells.len();
-            let slots_fit = c.child != LEAF || c.slots.iter().all(|&s| (s as usize) < dist.len());
+            let slots_fit = c.child != LEAF || c.slots.iter().all(|&s| (s as usize) < nodes.len());
             if !children_fit || !slots_fit {
                 return bad(format!("cell {i} points outside the tree"));
             }
@@ -149,7 +141,6 @@ impl MdTree {
             roots,
             cells,
             nodes,
-            dist,
             interface,
         })
     }
@@ -198,7 +189,7 @@ mod tests {
 
     use super::*;
 
-    /// A ball of phase 1 in phase 0, built, contoured and redistanced like a tracker's tree.
+    /// A ball of phase 1 in phase 0, built and contoured like a tracker's tree.
     fn ball_tree() -> MdTree {
         let grid = GridSpec {
             origin: DVec3::ZERO,
@@ -210,9 +201,8 @@ mod tests {
             let d = (x - c).length() - 0.3;
             (d.abs(), PhaseId::from(d < 0.0))
         };
-        let mut tree = MdTree::build(&grid, &sampler);
+        let tree = MdTree::build(&grid, &sampler);
         tree.contour(&sampler);
-        tree.redistance(&|x| ((x - c).length() - 0.3).abs());
         tree
     }
 

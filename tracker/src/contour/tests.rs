@@ -1,4 +1,4 @@
-//! Tests of the MD tree, the contour and the redistancing on analytic shapes.
+//! Tests of the MD tree and the contour on analytic shapes.
 
 use std::f64::consts::PI;
 
@@ -413,36 +413,6 @@ fn sample_reads_phase_and_distance_from_the_tree() {
     assert_eq!(tree.sample(DVec3::splat(-5.0)).map(|v| v.1), Some(0));
 }
 
-#[test]
-fn redistance_restores_the_distance_in_the_band() {
-    let grid = unit_grid(32);
-    // Half the true distance is still a lower bound, so the tree is valid but φ is wrong
-    // everywhere off the interface until redistanced.
-    let half = |x: DVec3| {
-        let (d, c) = sphere(x);
-        (0.5 * d, c)
-    };
-    let mut tree = MdTree::build(&grid, &half);
-    tree.redistance(&|x| sphere(x).0);
-    let lat = tree.lattice;
-    let mut checked = 0;
-    let mut worst: f64 = 0.0;
-    for c in tree.cells.iter().filter(|c| c.child == LEAF && c.size == 1) {
-        for k in 0..8 {
-            let id = lat.id(c.corner(k));
-            let Some(s) = tree.nodes.get(id) else {
-                continue;
-            };
-            worst = worst.max((tree.dist[s] - sphere(lat.pos(id)).0).abs());
-            checked += 1;
-        }
-    }
-    assert!(checked > 1000);
-    // First-order fast marching from exact seeds: the error grows like O(h) across the band
-    // (at most ~0.3·h per cell at 45°, the band is ≤ 6 cells); |error| ≤ h is the bound.
-    assert!(worst < grid.h, "worst FMM error {} h", worst / grid.h);
-}
-
 fn identical(a: &LabeledMesh, b: &LabeledMesh) -> bool {
     a.triangles == b.triangles
         && a.labels == b.labels
@@ -463,9 +433,8 @@ fn contour_is_deterministic_across_thread_counts() {
             Err(e) => panic!("thread pool: {e}"),
         };
         pool.install(|| {
-            let (_, mut tree, mesh) = build_and_contour(20, &f);
-            tree.redistance(&|x| f(x).0);
-            (mesh, tree.dist)
+            let (_, tree, mesh) = build_and_contour(20, &f);
+            (mesh, tree.nodes.phi)
         })
     };
     let (m1, d1) = run(1);
@@ -793,8 +762,8 @@ impl<F: Fn(DVec3) -> (f64, PhaseId) + Sync> PhaseSampler for NearOnly<F> {
 }
 
 /// The build asks each node only what its uses need: a sampler that answers far nodes with
-/// the reach alone gives the same tree and, to the bit, the same mesh and band distances.
-/// Far nodes keep a lower bound of at least 3 h.
+/// the reach alone gives the same tree and, to the bit, the same mesh and node distances near
+/// the interface. Far nodes keep a lower bound of at least 3 h.
 #[test]
 fn far_nodes_sampled_as_bounds_give_the_same_tree_and_mesh() {
     type Shape = Box<dyn Fn(DVec3) -> (f64, PhaseId) + Sync>;
@@ -804,8 +773,8 @@ fn far_nodes_sampled_as_bounds_give_the_same_tree_and_mesh() {
             f: &f,
             bounded: Default::default(),
         };
-        let (grid, mut exact_tree, exact_mesh) = build_and_contour(n, &f);
-        let (_, mut near_tree, near_mesh) = build_and_contour(n, &near);
+        let (grid, exact_tree, exact_mesh) = build_and_contour(n, &f);
+        let (_, near_tree, near_mesh) = build_and_contour(n, &near);
         let bounded = near.bounded.into_inner();
         assert!(
             bounded > 100,
@@ -814,9 +783,7 @@ fn far_nodes_sampled_as_bounds_give_the_same_tree_and_mesh() {
         assert!(identical(&exact_mesh, &near_mesh), "{n}³: meshes differ");
         assert_eq!(exact_tree.cell_count(), near_tree.cell_count());
         assert_eq!(exact_tree.interface, near_tree.interface);
-        exact_tree.redistance(&|x| f(x).0);
-        near_tree.redistance(&|x| f(x).0);
-        for (&e, &b) in exact_tree.dist.iter().zip(&near_tree.dist) {
+        for (&e, &b) in exact_tree.nodes.phi.iter().zip(&near_tree.nodes.phi) {
             let same = e.to_bits() == b.to_bits();
             assert!(same || (3.0 * grid.h <= b && b <= e), "φ {b} for exact {e}");
         }

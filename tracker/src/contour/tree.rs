@@ -18,7 +18,7 @@ const MAX_BLOCK: u64 = 16;
 const SPLIT_FACTOR: f64 = 3.0;
 /// How far (finest cells) a corner's φ is sampled exactly: corners of interface cells lie
 /// within a cell's diagonal of the interface, stretched by the step's flow, and only they
-/// bound crossings ([`crate::contour::bisect`]) or seed the redistancing; other corners need χ.
+/// bound crossings ([`crate::contour::bisect`]); other corners need χ.
 const CORNER_REACH_CELLS: f64 = 3.0;
 /// Low bits of a sampled point's key that say what it is sampled for.
 const USE_BITS: u32 = 6;
@@ -115,10 +115,9 @@ pub struct MdTree {
     pub(crate) block: u64,
     pub(crate) roots: [u64; 3],
     pub(crate) cells: Vec<Cell>,
-    /// φ, χ as sampled while building (φ drives the contour's bisection brackets).
+    /// φ, χ as sampled while building (φ drives the contour's bisection brackets and is what
+    /// [`MdTree::sample`] interpolates: exact near the interface, a lower bound far from it).
     pub(crate) nodes: NodeMap,
-    /// φ per node slot as [`MdTree::sample`] interpolates it (replaced by `redistance`).
-    pub(crate) dist: Vec<f64>,
     /// Unit leaves whose corners' χ differ, sorted by lattice id of their lower corner.
     pub(crate) interface: Vec<u32>,
 }
@@ -148,7 +147,6 @@ impl MdTree {
             roots: [0; 3],
             cells: Vec::new(),
             nodes: NodeMap::default(),
-            dist: Vec::new(),
             interface: Vec::new(),
         };
         if lattice.dims.contains(&0) {
@@ -183,7 +181,6 @@ impl MdTree {
             .collect();
         interface.sort_unstable();
         tree.interface = interface.into_iter().map(|(_, i)| i).collect();
-        tree.dist = tree.nodes.phi.clone();
         tree
     }
 
@@ -192,9 +189,8 @@ impl MdTree {
     /// Each point is sampled only as far as its uses need ([`PhaseSampler::sample_near`]): a
     /// centre of a cell of size s up to the split threshold 3·h·s; a corner up to
     /// [`CORNER_REACH_CELLS`] cells, beyond which only its χ is read (a far corner never
-    /// bounds a crossing or seeds the redistancing, and corners are never centres later:
-    /// corners of size-s cells lie on multiples of s, centres of smaller cells on odd
-    /// multiples of half their size).
+    /// bounds a crossing, and corners are never centres later: corners of size-s cells lie on
+    /// multiples of s, centres of smaller cells on odd multiples of half their size).
     fn sample_level(&mut self, frontier: &[u32], sampler: &dyn PhaseSampler) {
         let lat = self.lattice;
         let cells = &self.cells;
@@ -409,12 +405,6 @@ impl MdTree {
     /// leaf has uniform χ, `None` in interface cells (the caller then queries the mesh exactly).
     /// Points outside the grid box are clamped to it.
     pub fn sample(&self, x: DVec3) -> Option<(f64, PhaseId)> {
-        self.sample_with(&self.dist, x)
-    }
-
-    /// [`MdTree::sample`] with φ interpolated from `dist` (one value per node slot, as
-    /// [`MdTree::redistanced`] returns) instead of the tree's own.
-    pub fn sample_with(&self, dist: &[f64], x: DVec3) -> Option<(f64, PhaseId)> {
         let lat = &self.lattice;
         let hi = DVec3::new(lat.dims[0] as f64, lat.dims[1] as f64, lat.dims[2] as f64);
         let u = ((x - lat.origin) / lat.h).clamp(DVec3::ZERO, hi);
@@ -431,7 +421,7 @@ impl MdTree {
             let w = (0..3).fold(1.0, |w, a| {
                 w * if (k >> a) & 1 == 1 { t[a] } else { 1.0 - t[a] }
             });
-            phi += w * dist[cell.slots[k] as usize];
+            phi += w * self.nodes.phi[cell.slots[k] as usize];
         }
         Some((phi, cell.chi))
     }
