@@ -27,6 +27,16 @@ pub fn run_checked(
     resolution: i64,
     frames: Option<usize>,
 ) -> (Box<dyn InterfaceTracker>, usize, usize) {
+    run_checked_frames(name, resolution, frames, |_, _| {})
+}
+
+/// [`run_checked`], calling `at_frame(frame, tracker)` at the start and after every frame.
+pub fn run_checked_frames(
+    name: &str,
+    resolution: i64,
+    frames: Option<usize>,
+    mut at_frame: impl FnMut(usize, &dyn InterfaceTracker),
+) -> (Box<dyn InterfaceTracker>, usize, usize) {
     let scene = builtin_at(name, resolution);
     let (mut tracker, _) = build_tracker(&scene, None).expect("a valid start");
     let regions_before = tracker
@@ -35,6 +45,7 @@ pub fn run_checked(
     let per_frame = scene.steps_per_frame(tracker.max_travel());
     let total = per_frame * frames.unwrap_or(scene.file.time.frames as usize);
     let dt = scene.frame_dt() / per_frame as f64;
+    at_frame(0, tracker.as_ref());
     for s in 0..total {
         tracker
             .advance(&scene.velocity, s as f64 * dt, dt)
@@ -42,6 +53,9 @@ pub fn run_checked(
         invariants::check(tracker.mesh(), 0.0).unwrap_or_else(|e| panic!("{name} step {s}: {e}"));
         let hits = self_intersections(tracker.mesh());
         assert!(hits.is_empty(), "{name} step {s}: {hits:?}");
+        if (s + 1) % per_frame == 0 {
+            at_frame((s + 1) / per_frame, tracker.as_ref());
+        }
     }
     let regions_after = tracker
         .region_count()
