@@ -15,7 +15,7 @@ pub trait PhaseSampler: Sync {
 
     /// [`PhaseSampler::sample`] where φ(x) < `reach`; elsewhere χ as exactly, but φ may be any
     /// lower bound of at least `reach`. The tree's build asks no more of its far nodes (§6.2:
-    /// a centre only decides whether φ < 3·h_cell), so a sampler may skip the far search.
+    /// a centre only decides whether φ < 2·h_cell), so a sampler may skip the far search.
     fn sample_near(&self, x: DVec3, reach: f64) -> (f64, PhaseId) {
         let _ = reach;
         self.sample(x)
