@@ -107,8 +107,8 @@ impl MeshQuery {
             .collect();
         let labels: Vec<[PhaseId; 2]> = source.iter().map(|&t| mesh.labels[t as usize]).collect();
         let triangles: Vec<[u32; 3]> = source.iter().map(|&t| mesh.triangles[t as usize]).collect();
-        let edges = Edges::build(&triangles);
         let around = VertexCorners::build(mesh.vertices.len(), &triangles);
+        let edges = Edges::build(&around, &triangles);
         let pseudonormals = Pseudonormals::build(&around, &corners, &normals, &labels);
         let tris = corners
             .iter()
