@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::run_checked_frames;
+use common::{interface_vertices, run_checked_frames};
 use polyphase_tracker::LabeledMesh;
 
 /// The scene's phases, in file order.
@@ -15,9 +15,7 @@ const SOUTH: u16 = 3;
 
 /// Does `mesh` have a face between phases `a` and `b`?
 fn has_film(mesh: &LabeledMesh, a: u16, b: u16) -> bool {
-    mesh.labels
-        .iter()
-        .any(|l| (l[0] == a && l[1] == b) || (l[0] == b && l[1] == a))
+    !interface_vertices(mesh, a, b).is_empty()
 }
 
 /// The west–east film is there at the start and gone at t = 0.2, replaced by a north–south

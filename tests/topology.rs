@@ -6,18 +6,8 @@
 
 mod common;
 
+use common::interface_vertices;
 use common::run_checked as run;
-use polyphase_tracker::LabeledMesh;
-
-/// Vertices of the faces between phases `a` and `b`.
-fn interface_vertices(mesh: &LabeledMesh, a: u16, b: u16) -> Vec<glam::DVec3> {
-    mesh.triangles
-        .iter()
-        .zip(&mesh.labels)
-        .filter(|(_, l)| (l[0] == a && l[1] == b) || (l[0] == b && l[1] == a))
-        .flat_map(|(t, _)| t.map(|v| mesh.vertices[v as usize]))
-        .collect()
-}
 
 /// Paper 000 Fig. 15: two expanding spheres of different liquids meet; the interface the
 /// merge creates has speed 0, so it is a flat disk on the bisecting plane x = ½ (every vertex

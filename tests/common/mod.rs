@@ -8,7 +8,7 @@ use std::process::{Command, Output};
 
 use polyphase_coupling::build_tracker;
 use polyphase_tracker::front::intersection::self_intersections;
-use polyphase_tracker::{invariants, InterfaceTracker};
+use polyphase_tracker::{invariants, InterfaceTracker, LabeledMesh};
 
 /// Built-in scene `name` at tracker `resolution`.
 pub fn builtin_at(name: &str, resolution: i64) -> polyphase_scenes::Scene {
@@ -61,6 +61,16 @@ pub fn run_checked_frames(
         .region_count()
         .expect("the front tracker counts regions");
     (tracker, regions_before, regions_after)
+}
+
+/// Vertices of the faces between phases `a` and `b`.
+pub fn interface_vertices(mesh: &LabeledMesh, a: u16, b: u16) -> Vec<glam::DVec3> {
+    mesh.triangles
+        .iter()
+        .zip(&mesh.labels)
+        .filter(|(_, l)| (l[0] == a && l[1] == b) || (l[0] == b && l[1] == a))
+        .flat_map(|(t, _)| t.map(|v| mesh.vertices[v as usize]))
+        .collect()
 }
 
 /// Runs the `polyphase` binary with `args`.
