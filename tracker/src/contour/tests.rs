@@ -792,3 +792,80 @@ fn far_nodes_sampled_as_bounds_give_the_same_tree_and_mesh() {
         }
     }
 }
+
+/// `f`, recording every point it is asked for.
+struct Recording<F> {
+    f: F,
+    asked: std::sync::Mutex<Vec<DVec3>>,
+}
+
+impl<F: Fn(DVec3) -> (f64, PhaseId) + Sync> PhaseSampler for Recording<F> {
+    fn sample(&self, x: DVec3) -> (f64, PhaseId) {
+        if let Ok(mut asked) = self.asked.lock() {
+            asked.push(x);
+        }
+        (self.f)(x)
+    }
+}
+
+/// Each level lists only the corners its cells bring (`Cell::brings_corner`: a split's
+/// siblings share theirs, and the parent's are stored): still every node is sampled exactly
+/// once, and every cell's slots hold its own corners, on a cube, a slab and a grid of 2-cell
+/// blocks (roots and children of every shape).
+#[test]
+fn every_corner_is_sampled_once_and_slotted() {
+    type Shape = Box<dyn Fn(DVec3) -> (f64, PhaseId) + Sync>;
+    let odd = GridSpec {
+        origin: DVec3::ZERO,
+        h: 1.0 / 30.0,
+        dims: [26, 30, 2],
+    };
+    let cases: [(GridSpec, Shape); 3] = [
+        (unit_grid(32), Box::new(wedges(3))),
+        (slab_grid(64), Box::new(disc_sectors(3))),
+        (odd, Box::new(disc_sectors(2))),
+    ];
+    for (grid, f) in cases {
+        let rec = Recording {
+            f: &f,
+            asked: Default::default(),
+        };
+        let tree = MdTree::build(&grid, &rec);
+        let mut asked: Vec<[u64; 3]> = rec
+            .asked
+            .into_inner()
+            .unwrap_or_default()
+            .iter()
+            .map(|x| {
+                ((*x - grid.origin) / grid.h)
+                    .round()
+                    .to_array()
+                    .map(|u| u as u64)
+            })
+            .collect();
+        let sampled = asked.len();
+        asked.sort_unstable();
+        asked.dedup();
+        assert_eq!(
+            asked.len(),
+            sampled,
+            "{:?}: a node sampled twice",
+            grid.dims
+        );
+        assert_eq!(sampled, tree.node_count(), "{:?}", grid.dims);
+        let lat = tree.lattice;
+        for c in &tree.cells {
+            for k in 0..8 {
+                let slot = c.slots[k] as usize;
+                assert_eq!(
+                    tree.nodes.keys[slot],
+                    lat.id(c.corner(k)),
+                    "{c:?} corner {k}"
+                );
+            }
+            if c.size >= 2 {
+                assert!(tree.nodes.get(lat.id(c.centre())).is_some(), "{c:?}");
+            }
+        }
+    }
+}

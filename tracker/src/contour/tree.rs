@@ -87,6 +87,33 @@ impl Cell {
     pub fn child_count(&self) -> u32 {
         1 << self.split_mask().count_ones()
     }
+
+    /// Whether corner `k` is a lattice node this cell brings to its level: always for a root
+    /// (size `block`); for a child, only if it is not its parent's corner or centre (sampled
+    /// a level up) and no sibling in a lower octant has it (the corners shared between
+    /// siblings go to the sibling lowest along each axis). So a split's 27 nodes are listed
+    /// 18 times instead of 64, and [`MdTree::sample_level`] sorts 2.8× fewer points.
+    #[inline]
+    fn brings_corner(&self, k: usize, block: u64, dims: [u64; 3]) -> bool {
+        if self.size == block {
+            return true;
+        }
+        let mut on_parent_corner = true;
+        let mut on_parent_centre = true;
+        for (a, &dim) in dims.iter().enumerate() {
+            let parent_edge = (2 * self.size).min(dim);
+            let parent_min = self.min[a] - self.min[a] % parent_edge;
+            let upper = self.min[a] != parent_min;
+            let bit = (k >> a) & 1 == 1;
+            if upper && !bit {
+                return false;
+            }
+            let q = self.min[a] + if bit { self.edge[a] } else { 0 };
+            on_parent_corner &= q == parent_min || q == parent_min + parent_edge;
+            on_parent_centre &= q == parent_min + parent_edge / 2;
+        }
+        !on_parent_corner && !on_parent_centre
+    }
 }
 
 /// A cell's edges per axis at level `size` in a grid of `dims` cells: `size`, except along
@@ -200,9 +227,11 @@ impl MdTree {
     /// [`CORNER_REACH_CELLS`] cells, beyond which only its χ is read (a far corner never
     /// bounds a crossing, and corners are never centres later: corners of size-s cells lie on
     /// multiples of s, centres of smaller cells on odd multiples of half their size).
+    /// `frontier` holds roots or whole sibling groups, each child's parent already sampled
+    /// ([`Cell::brings_corner`]).
     fn sample_level(&mut self, frontier: &[u32], sampler: &dyn PhaseSampler) {
         let lat = self.lattice;
-        let cells = &self.cells;
+        let (cells, block) = (&self.cells, self.block);
         // Node id above, the use's size code below: 0 for a corner, log2(s) + 1 for a centre.
         let mut pts: Vec<u64> = frontier
             .par_iter()
@@ -212,6 +241,7 @@ impl MdTree {
                     lat.id(cell.centre()) << USE_BITS | u64::from(cell.size.trailing_zeros() + 1)
                 });
                 (0..8)
+                    .filter(move |&k| cell.brings_corner(k, block, lat.dims))
                     .map(move |k| lat.id(cell.corner(k)) << USE_BITS)
                     .chain(centre)
             })
