@@ -9,6 +9,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use polyphase_coupling::{build_tracker, AnyTracker};
 use polyphase_scenes::Scene;
+use polyphase_tracker::volume_correction::components::Components;
 use polyphase_tracker::{metrics, InterfaceTracker, LabeledMesh, StepStats};
 use serde_json::{json, Value};
 
@@ -232,7 +233,9 @@ fn frame_line(
 }
 
 /// For a periodic flow the shapes should be back where they started: relative volume error per
-/// phase against the exact initial volumes, and the Hausdorff distance to the initial mesh.
+/// phase against the exact initial volumes, the Hausdorff distance to the initial mesh, and
+/// the connected pieces of each phase but the background (how many, and the largest one's
+/// share of the phase's volume): a sheet torn on the way comes back as several.
 fn add_period_errors(
     line: &mut Value,
     tracker: &impl InterfaceTracker,
@@ -251,4 +254,21 @@ fn add_period_errors(
     let h = metrics::hausdorff(tracker.mesh(), initial_mesh);
     line["volume_error"] = json!(errors);
     line["hausdorff"] = json!({ "absolute": h, "over_h": h / scene.grid.h });
+    let background = scene.initial.background;
+    let found = Components::find(tracker.mesh(), names.len(), background);
+    let pieces: BTreeMap<&str, Value> = names
+        .iter()
+        .enumerate()
+        .filter(|&(p, _)| p != usize::from(background))
+        .map(|(p, name)| {
+            let volumes = (0..found.len())
+                .filter(|&c| usize::from(found.phase[c]) == p)
+                .map(|c| found.volume[c]);
+            let (count, total, largest) =
+                volumes.fold((0, 0.0, 0.0_f64), |(n, t, m), v| (n + 1, t + v, m.max(v)));
+            let share = if total > 0.0 { largest / total } else { 0.0 };
+            (name.as_str(), json!({ "count": count, "largest": share }))
+        })
+        .collect();
+    line["pieces"] = json!(pieces);
 }
