@@ -342,11 +342,6 @@ impl Departure<'_> {
     }
 }
 
-/// How deep (finest cells) a face's region must reach for the volume correction to offset it:
-/// sheets thinner than twice this take no offset ([`VolumeShift::holding_sheets`]). `enright`'s
-/// sheets tear at 128³ where they are 1–2 cells thin; held below 3, it ends at 10.5 h.
-const SHEET_DEPTH_CELLS: f64 = 1.5;
-
 /// How much farther than a flat triangle the curved, shifted interface of a contoured mesh
 /// can lie, in finest cells: the Phong bulge is at most ½·sin 25°·√3 h ≈ 0.37 h (a contoured
 /// triangle spans at most a cell's diagonal, and corners more than 25° off the facet do not
@@ -408,7 +403,7 @@ impl InterfaceTracker for ContourTracker {
         let ((tree, mesh, query, mut stats, _), next) = loop {
             // A quarter cell per step at most: a sheet lost in one step comes back over a few.
             departure.shift = aim.as_ref().map(|aim| {
-                VolumeShift::holding_sheets(
+                VolumeShift::new(
                     &self.mesh,
                     &self.components,
                     aim,
@@ -418,7 +413,6 @@ impl InterfaceTracker for ContourTracker {
                     } else {
                         0.0
                     },
-                    (&self.query, SHEET_DEPTH_CELLS * self.grid.h),
                 )
             });
             let mut built = rebuild(&self.grid, &departure, self.background, Some(self.n_phases));

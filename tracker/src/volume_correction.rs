@@ -44,7 +44,6 @@
 //! with the volume its group of descendants ends with ([`succession::Succession::pull_back`]).
 
 pub mod components;
-pub mod sheets;
 pub mod succession;
 
 use std::collections::{BTreeMap, HashMap};
@@ -56,7 +55,6 @@ use rayon::prelude::*;
 
 use crate::front::broadphase::CellHasher;
 use crate::mesh::LabeledMesh;
-use crate::query::MeshQuery;
 use components::{root, union, Components, NONE};
 
 /// The interface offsets that bring each component of a mesh to its target volume.
@@ -83,35 +81,11 @@ impl VolumeShift {
         cap: f64,
         reach: f64,
     ) -> Self {
-        Self::build(mesh, components, targets, cap, reach, None)
-    }
-
-    /// [`VolumeShift::new`], with the faces of sheets thinner than `2 · depth` held still
-    /// ([`sheets::hold_sheets`]; `query` is `mesh`'s).
-    pub fn holding_sheets(
-        mesh: &LabeledMesh,
-        components: &Components,
-        targets: &[f64],
-        cap: f64,
-        reach: f64,
-        (query, depth): (&MeshQuery, f64),
-    ) -> Self {
-        Self::build(mesh, components, targets, cap, reach, Some((query, depth)))
-    }
-
-    fn build(
-        mesh: &LabeledMesh,
-        components: &Components,
-        targets: &[f64],
-        cap: f64,
-        reach: f64,
-        sheets: Option<(&MeshQuery, f64)>,
-    ) -> Self {
         let n = components.len();
         let corrected: Vec<bool> = (0..n)
             .map(|c| targets.get(c).is_some_and(|&t| t > 0.0) && components.area[c] > 0.0)
             .collect();
-        let weights = junction_weights(mesh, components, &corrected, reach, sheets);
+        let weights = junction_weights(mesh, components, &corrected, reach);
         let deficit: Vec<f64> = (0..n)
             .map(|c| {
                 if corrected[c] {
@@ -265,33 +239,7 @@ pub fn junction_weights(
     components: &Components,
     corrected: &[bool],
     reach: f64,
-    sheets: Option<(&MeshQuery, f64)>,
 ) -> Vec<f64> {
-    let mut weights = near_junctions(mesh, reach);
-    let mut weighted = vec![0.0; components.len()];
-    for (t, &w) in weights.iter().enumerate() {
-        for c in components.sides[t] {
-            if c != NONE {
-                weighted[c as usize] += w * mesh.area(t);
-            }
-        }
-    }
-    let bare = |c: u32| c != NONE && corrected[c as usize] && weighted[c as usize] <= 0.0;
-    for (t, w) in weights.iter_mut().enumerate() {
-        if components.sides[t].into_iter().any(bare) {
-            *w = 1.0;
-        }
-    }
-    // After that rule: a component that is a sheet all over (a torn piece) takes no offset.
-    if let Some((query, depth)) = sheets {
-        sheets::hold_sheets(mesh, components, corrected, query, depth, &mut weights);
-    }
-    weights
-}
-
-/// The junction part of [`junction_weights`]: 0 within `reach` of a junction vertex, rising
-/// linearly to 1 at `2 · reach`; all 1 for a `reach` of 0.
-fn near_junctions(mesh: &LabeledMesh, reach: f64) -> Vec<f64> {
     let count = mesh.triangle_count();
     if reach <= 0.0 {
         return vec![1.0; count];
@@ -322,7 +270,7 @@ fn near_junctions(mesh: &LabeledMesh, reach: f64) -> Vec<f64> {
     }
     // Each weight is a function of its triangle alone (a minimum), so the parallel map
     // gives the same bits on any number of threads.
-    (0..count)
+    let mut weights: Vec<f64> = (0..count)
         .into_par_iter()
         .map(|t| {
             if junctions.is_empty() || !interface(t) {
@@ -344,7 +292,22 @@ fn near_junctions(mesh: &LabeledMesh, reach: f64) -> Vec<f64> {
             }
             (nearest2.sqrt() / reach - 1.0).clamp(0.0, 1.0)
         })
-        .collect()
+        .collect();
+    let mut weighted = vec![0.0; components.len()];
+    for (t, &w) in weights.iter().enumerate() {
+        for c in components.sides[t] {
+            if c != NONE {
+                weighted[c as usize] += w * mesh.area(t);
+            }
+        }
+    }
+    let bare = |c: u32| c != NONE && corrected[c as usize] && weighted[c as usize] <= 0.0;
+    for (t, w) in weights.iter_mut().enumerate() {
+        if components.sides[t].into_iter().any(bare) {
+            *w = 1.0;
+        }
+    }
+    weights
 }
 
 /// Solves `Σ_b A_ab (p_a − p_b) = deficit_a` for the corrected components (`A_ab` the area of
@@ -594,7 +557,7 @@ mod tests {
         let targets = [components.volume[0] * 1.02, components.volume[1] * 0.97];
         let reach = 2.0 / 6.0;
         let corrected = [true, true];
-        let weights = junction_weights(&mesh, &components, &corrected, reach, None);
+        let weights = junction_weights(&mesh, &components, &corrected, reach);
         let interface = (0..mesh.triangle_count()).filter(|&t| !mesh.labels[t].contains(&OUTSIDE));
         assert!(interface.clone().all(|t| weights[t] == 1.0), "fallback");
         let shift = VolumeShift::new(&mesh, &components, &targets, f64::INFINITY, reach);
