@@ -132,33 +132,37 @@ fn monotone_cubic(spec: &GridSpec, layout: &Layout, data: &[f64], a: usize, x: D
     mono_cubic(planes, frac[2])
 }
 
-/// Trilinear value of component `a` at `x`: the general path's arithmetic in its order (so
-/// the same bits), with each axis's two sample offsets found once instead of per read. Off a
-/// periodic axis the clamped coordinate is non-negative, so truncation is its floor (`floor`
-/// is a library call on baseline x86-64, and interpolation is most of a coupled step's
-/// backtraces).
+/// The two samples around lattice coordinate `g` along one axis of `m` samples (wrapped when
+/// periodic, clamped otherwise) and the weight of the upper one: the general path's
+/// arithmetic in its order (so the same bits). Off a periodic axis the clamped coordinate is
+/// non-negative, so truncation is its floor (`floor` is a library call on baseline x86-64,
+/// and interpolation is most of a coupled step's backtraces).
 #[inline]
-fn trilinear(spec: &GridSpec, layout: &Layout, data: &[f64], a: usize, x: DVec3) -> f64 {
-    let (g, dims) = lattice(spec, layout, a, x);
+fn axis_pair(g: f64, m: usize, periodic: bool) -> ([usize; 2], f64) {
+    if periodic {
+        let i0 = g.floor();
+        let i = i0 as isize;
+        ([axis_index(i, m, true), axis_index(i + 1, m, true)], g - i0)
+    } else if m < 2 {
+        ([0, 0], 0.0)
+    } else {
+        let gc = g.clamp(0.0, (m - 1) as f64);
+        let i0 = (gc as usize).min(m - 2);
+        ([i0, i0 + 1], gc - i0 as f64)
+    }
+}
+
+/// Σ wᵢ wⱼ wₖ · sample over the eight samples of `axes` (per axis: indices and upper weight)
+/// in an array of `dims`. Plain loops: `array::map` here is not inlined and costs more than
+/// the interpolation.
+#[inline(always)]
+fn weighted_sum(data: &[f64], dims: [usize; 3], axes: &[([usize; 2], f64); 3]) -> f64 {
     let strides = [1, dims[0], dims[0] * dims[1]];
     let mut offsets = [[0usize; 2]; 3];
     let mut frac = [0.0; 3];
     for d in 0..3 {
-        let m = dims[d];
-        let (lo, hi) = if layout.periodic[d] {
-            let i0 = g[d].floor();
-            frac[d] = g[d] - i0;
-            let i0 = i0 as isize;
-            (axis_index(i0, m, true), axis_index(i0 + 1, m, true))
-        } else if m < 2 {
-            (0, 0)
-        } else {
-            let gc = g[d].clamp(0.0, (m - 1) as f64);
-            let i0 = (gc as usize).min(m - 2);
-            frac[d] = gc - i0 as f64;
-            (i0, i0 + 1)
-        };
-        offsets[d] = [lo * strides[d], hi * strides[d]];
+        offsets[d] = [axes[d].0[0] * strides[d], axes[d].0[1] * strides[d]];
+        frac[d] = axes[d].1;
     }
     let mut s = 0.0;
     for dk in 0..2 {
@@ -173,6 +177,44 @@ fn trilinear(spec: &GridSpec, layout: &Layout, data: &[f64], a: usize, x: DVec3)
         }
     }
     s
+}
+
+/// Trilinear value of component `a` at `x`, with each axis's two sample offsets found once
+/// instead of per read.
+#[inline]
+fn trilinear(spec: &GridSpec, layout: &Layout, data: &[f64], a: usize, x: DVec3) -> f64 {
+    let (g, dims) = lattice(spec, layout, a, x);
+    let mut axes = [([0; 2], 0.0); 3];
+    for d in 0..3 {
+        axes[d] = axis_pair(g[d], dims[d], layout.periodic[d]);
+    }
+    weighted_sum(data, dims, &axes)
+}
+
+/// Trilinear values of the three components at `x`, the same bits as three calls of
+/// [`trilinear`]: along each axis a component samples either at nodes (its own axis) or at
+/// cell centres (the other two), so six axis lookups serve all three instead of nine, and
+/// the lattice coordinates are computed once. Backtraces spend most of their time here.
+pub(crate) fn trilinear_velocity(
+    spec: &GridSpec,
+    layout: &Layout,
+    comps: [&[f64]; 3],
+    x: DVec3,
+) -> DVec3 {
+    let q = ((x - spec.origin) / spec.h).to_array();
+    let mut node = [([0; 2], 0.0); 3];
+    let mut centre = [([0; 2], 0.0); 3];
+    for d in 0..3 {
+        node[d] = axis_pair(q[d], layout.nodes(d), layout.periodic[d]);
+        centre[d] = axis_pair(q[d] - 0.5, layout.n[d], layout.periodic[d]);
+    }
+    let mut v = [0.0; 3];
+    for a in 0..3 {
+        let mut axes = centre;
+        axes[a] = node[a];
+        v[a] = weighted_sum(comps[a], layout.face_dims(a), &axes);
+    }
+    DVec3::from_array(v)
 }
 
 /// Minimum and maximum of the eight trilinear samples of component `a` around `x`: the
@@ -251,5 +293,47 @@ mod tests {
         assert!((v(0.25, 1.0, 0.5) - (0.75 + 10.0)).abs() < 1e-12);
         // Below the floor and above the top z sample: the end samples.
         assert!((v(1.5, -0.5, 1.9) - (1.0 + 100.0)).abs() < 1e-12);
+    }
+
+    /// The three-component path shares each axis's lookups between components and must give
+    /// each component's value to the bit, inside, outside and across a periodic wrap, and on
+    /// an axis of a single cell.
+    #[test]
+    fn velocity_at_once_matches_each_component_to_the_bit() {
+        let spec = GridSpec {
+            origin: DVec3::new(-0.3, 0.1, 2.0),
+            h: 0.7,
+            dims: [5, 3, 1],
+        };
+        for periodic in [[true, false, false], [false, true, true], [false; 3]] {
+            let layout = Layout {
+                n: spec.dims,
+                periodic,
+            };
+            let comps: Vec<Vec<f64>> = (0..3)
+                .map(|a| {
+                    let [i, j, k] = layout.face_dims(a);
+                    (0..i * j * k)
+                        .map(|f| ((f * 37 + a * 11) % 23) as f64 / 7.0 - 1.3)
+                        .collect()
+                })
+                .collect();
+            let comps = [&comps[0][..], &comps[1][..], &comps[2][..]];
+            for s in 0..500 {
+                // Points from 1.5 cells below the box to 1.5 above, on a fixed scramble.
+                let u = |m: usize| ((s * m + 17) % 101) as f64 / 100.0;
+                let x = spec.origin
+                    + DVec3::new(
+                        (u(13) * 8.0 - 1.5) * spec.h,
+                        (u(29) * 6.0 - 1.5) * spec.h,
+                        (u(53) * 4.0 - 1.5) * spec.h,
+                    );
+                let all = trilinear_velocity(&spec, &layout, comps, x);
+                for a in 0..3 {
+                    let one = sample(&spec, &layout, comps[a], a, x, Interpolation::Trilinear);
+                    assert_eq!(all[a].to_bits(), one.to_bits(), "{periodic:?} {x} comp {a}");
+                }
+            }
+        }
     }
 }

@@ -89,6 +89,10 @@ impl MacGrid {
 
     /// Interpolated velocity at `x`.
     pub fn sample(&self, x: DVec3) -> DVec3 {
+        if self.interpolation == Interpolation::Trilinear {
+            let [u, v, w] = &self.comps;
+            return interp::trilinear_velocity(&self.spec, &self.layout, [u, v, w], x);
+        }
         DVec3::new(
             self.sample_component(0, x),
             self.sample_component(1, x),
