@@ -156,8 +156,9 @@ fn line_pivots<T: Real>(a: &Stencil7<T>) -> Vec<T> {
     pivots
 }
 
-/// One red–black half-sweep: unknowns of `color` get their Gauss–Seidel value from `x`.
-fn half_sweep<T: Real>(a: &Stencil7<T>, b: &[T], x: &[T], out: &mut [T], color: usize) {
+/// One red–black half-sweep: unknowns of `color` get their Gauss–Seidel value from `x`
+/// (`None`: a zero guess, which is then not read; the same values as from zeros).
+fn half_sweep<T: Real>(a: &Stencil7<T>, b: &[T], x: Option<&[T]>, out: &mut [T], color: usize) {
     let nx = a.dims[0];
     let ny = a.dims[1];
     out.par_chunks_mut(nx)
@@ -166,14 +167,17 @@ fn half_sweep<T: Real>(a: &Stencil7<T>, b: &[T], x: &[T], out: &mut [T], color: 
         .for_each(|(row, o)| {
             let (j, k) = (row % ny, row / ny);
             let base = row * nx;
-            a.offdiag_row(row, x, o);
+            match x {
+                Some(x) => a.offdiag_row(row, x, o),
+                None => o.iter_mut().for_each(|v| *v = T::ZERO),
+            }
             let first = (color + j + k) % 2;
             for (i, oi) in o.iter_mut().enumerate() {
                 let c = base + i;
                 *oi = if i % 2 == first && a.diag[c] > T::ZERO {
                     (b[c] - *oi) / a.diag[c]
                 } else {
-                    x[c]
+                    x.map_or(T::ZERO, |x| x[c])
                 };
             }
         });
@@ -184,12 +188,13 @@ fn half_sweep<T: Real>(a: &Stencil7<T>, b: &[T], x: &[T], out: &mut [T], color: 
 /// excepted; `pivots` from [`line_pivots`]), with the couplings to other rows taken from `x`.
 /// Every row solve reads only `x`, so the sweep is parallel and deterministic. The rows of a
 /// group of [`LINE_GROUP`] are eliminated side by side: each row's recurrence is a serial
-/// chain, and interleaving independent chains keeps the core busy.
+/// chain, and interleaving independent chains keeps the core busy. `x` = `None` is a zero
+/// guess, not read: the couplings to other rows vanish.
 fn line_half_sweep<T: Real>(
     a: &Stencil7<T>,
     pivots: &[T],
     b: &[T],
-    x: &[T],
+    x: Option<&[T]>,
     out: &mut [T],
     color: usize,
 ) {
@@ -208,8 +213,17 @@ fn line_half_sweep<T: Real>(
                 for (r, o) in og.chunks_mut(nx).enumerate() {
                     let row = first + r;
                     let base = row * nx;
+                    let active_row = (row % ny + row / ny) % 2 == color;
+                    let Some(x) = x else {
+                        o.iter_mut().for_each(|v| *v = T::ZERO);
+                        if active_row {
+                            active[lanes] = r;
+                            lanes += 1;
+                        }
+                        continue;
+                    };
                     let xr = &x[base..base + nx];
-                    if (row % ny + row / ny) % 2 != color {
+                    if !active_row {
                         o.copy_from_slice(xr);
                         continue;
                     }
@@ -233,7 +247,7 @@ fn line_half_sweep<T: Real>(
                         let inv = pivots[c];
                         if inv == T::ZERO {
                             upper[lane * nx + i] = T::ZERO;
-                            *o = x[c];
+                            *o = x.map_or(T::ZERO, |x| x[c]);
                         } else {
                             let lower = if i > 0 { off[c - 1] } else { T::ZERO };
                             let up = if i + 1 < nx { off[c] } else { T::ZERO };
@@ -253,7 +267,24 @@ fn line_half_sweep<T: Real>(
         );
 }
 
-/// Half-sweeps of the given colours, point or line (`pivots` non-empty) Gauss–Seidel.
+/// One half-sweep of `color` into `out`, point or line (`pivots` non-empty) Gauss–Seidel,
+/// from `x` (`None`: from zero).
+fn half<T: Real>(
+    a: &Stencil7<T>,
+    pivots: &[T],
+    b: &[T],
+    x: Option<&[T]>,
+    out: &mut [T],
+    color: usize,
+) {
+    if pivots.is_empty() {
+        half_sweep(a, b, x, out, color);
+    } else {
+        line_half_sweep(a, pivots, b, x, out, color);
+    }
+}
+
+/// Half-sweeps of the given colours on `x`, `tmp` as scratch.
 fn sweeps<T: Real>(
     a: &Stencil7<T>,
     pivots: &[T],
@@ -263,13 +294,53 @@ fn sweeps<T: Real>(
     colors: &[usize],
 ) {
     for &col in colors {
-        if pivots.is_empty() {
-            half_sweep(a, b, x, tmp, col);
-        } else {
-            line_half_sweep(a, pivots, b, x, tmp, col);
-        }
+        half(a, pivots, b, Some(x), tmp, col);
         std::mem::swap(x, tmp);
     }
+}
+
+/// The residual b − A·x summed over each 2×2×2 aggregate into `out` (a box of `cd`), in one
+/// pass: each coarse row computes the residual of its up to four fine rows into a buffer and
+/// sums them there, the same values and order as forming the whole residual first.
+fn restrict_residual<T: Real>(a: &Stencil7<T>, b: &[T], x: &[T], cd: [usize; 3], out: &mut [T]) {
+    let fd = a.dims;
+    let nx = fd[0];
+    out.par_chunks_mut(cd[0]).enumerate().for_each_init(
+        || vec![T::ZERO; 4 * nx],
+        |rows, (crow, o)| {
+            let (jc, kc) = (crow % cd[1], crow / cd[1]);
+            let mut present = [false; 4];
+            for dk in 0..2 {
+                for dj in 0..2 {
+                    let (j, k) = (2 * jc + dj, 2 * kc + dk);
+                    if j >= fd[1] || k >= fd[2] {
+                        continue;
+                    }
+                    let row = j + fd[1] * k;
+                    let base = row * nx;
+                    let r = &mut rows[(2 * dk + dj) * nx..][..nx];
+                    a.offdiag_row(row, x, r);
+                    for (i, ri) in r.iter_mut().enumerate() {
+                        *ri += a.diag[base + i] * x[base + i];
+                        *ri = b[base + i] - *ri;
+                    }
+                    present[2 * dk + dj] = true;
+                }
+            }
+            for (ic, oi) in o.iter_mut().enumerate() {
+                let mut s = T::ZERO;
+                for (q, _) in present.iter().enumerate().filter(|(_, &p)| p) {
+                    for di in 0..2 {
+                        let i = 2 * ic + di;
+                        if i < nx {
+                            s += rows[q * nx + i];
+                        }
+                    }
+                }
+                *oi = s;
+            }
+        },
+    );
 }
 
 impl<'a, T: Real> Multigrid<'a, T> {
@@ -344,9 +415,12 @@ impl<'a, T: Real> Multigrid<'a, T> {
             .lock()
             .unwrap_or_else(PoisonError::into_inner);
         let [x, tmp, _] = &mut *guard;
-        x.par_iter_mut().for_each(|v| *v = T::ZERO);
+        // The first half-sweep starts from zero and writes every unknown.
+        half(a, piv, b, None, tmp, 0);
+        std::mem::swap(x, tmp);
+        sweeps(a, piv, b, x, tmp, &[1]);
         if l == self.coarse.len() {
-            for _ in 0..COARSEST_SWEEPS {
+            for _ in 1..COARSEST_SWEEPS {
                 sweeps(a, piv, b, x, tmp, &[0, 1]);
             }
             for _ in 0..COARSEST_SWEEPS {
@@ -354,39 +428,16 @@ impl<'a, T: Real> Multigrid<'a, T> {
             }
             return;
         }
-        for _ in 0..self.smooth {
+        for _ in 1..self.smooth {
             sweeps(a, piv, b, x, tmp, &[0, 1]);
         }
-        a.apply(x, tmp);
-        tmp.par_iter_mut().zip(b).for_each(|(t, &bi)| *t = bi - *t);
         let c = self.level(l + 1);
         let cd = c.dims;
         let fd = a.dims;
-        let resid = &*tmp;
         let mut next = self.scratch[l + 1]
             .lock()
             .unwrap_or_else(PoisonError::into_inner);
-        let (cnx, cny) = (cd[0], cd[1]);
-        next[2]
-            .par_chunks_mut(cnx)
-            .enumerate()
-            .for_each(|(row, out)| {
-                let (jc, kc) = (row % cny, row / cny);
-                for (ic, o) in out.iter_mut().enumerate() {
-                    let mut s = T::ZERO;
-                    for dk in 0..2 {
-                        for dj in 0..2 {
-                            for di in 0..2 {
-                                let p = [2 * ic + di, 2 * jc + dj, 2 * kc + dk];
-                                if p[0] < fd[0] && p[1] < fd[1] && p[2] < fd[2] {
-                                    s += resid[idx(fd, p)];
-                                }
-                            }
-                        }
-                    }
-                    *o = s;
-                }
-            });
+        restrict_residual(a, b, x, cd, &mut next[2]);
         let rc = std::mem::take(&mut next[2]);
         drop(next);
         self.vcycle(l + 1, &rc);
