@@ -200,6 +200,33 @@ fn neighbours(dims: [usize; 3], periodic: [bool; 3], p: [usize; 3]) -> impl Iter
     })
 }
 
+/// `mask` grown by one face in every direction, diagonals included (the 26 neighbours of
+/// [`neighbours`], wrapping the same way), as three passes along the axes instead of 26 reads
+/// per face: the extension's first ring is every owned face next to an unreached one, and
+/// most faces are owned.
+fn dilate(dims: [usize; 3], periodic: [bool; 3], mut mask: Vec<bool>) -> Vec<bool> {
+    let strides = [1, dims[0], dims[0] * dims[1]];
+    for d in 0..3 {
+        let n = dims[d];
+        if n < 2 {
+            continue;
+        }
+        let wrap = periodic[d];
+        let grown: Vec<bool> = (0..mask.len())
+            .into_par_iter()
+            .map(|f| {
+                let i = (f / strides[d]) % n;
+                let at = |j: usize| mask[f - i * strides[d] + j * strides[d]];
+                let below = if i > 0 { at(i - 1) } else { wrap && at(n - 1) };
+                let above = if i + 1 < n { at(i + 1) } else { wrap && at(0) };
+                mask[f] || below || above
+            })
+            .collect();
+        mask = grown;
+    }
+    mask
+}
+
 /// [`extend`] for one component: ring by ring from the phase's own faces, visiting only the
 /// faces next to the previous ring.
 fn extend_component(
@@ -222,9 +249,14 @@ fn extend_component(
         })
         .collect();
     let near = |f: usize| neighbours(dims, periodic, unidx(dims, f));
+    let open_unreached: Vec<bool> = (0..comp.len())
+        .into_par_iter()
+        .map(|f| layer[f] == UNREACHED && open[f] > 0.0)
+        .collect();
+    let next_to_unreached = dilate(dims, periodic, open_unreached);
     let mut ring: Vec<usize> = (0..comp.len())
         .into_par_iter()
-        .filter(|&f| layer[f] == 0 && near(f).any(|n| layer[n] == UNREACHED && open[n] > 0.0))
+        .filter(|&f| layer[f] == 0 && next_to_unreached[f])
         .collect();
     for k in 1..=layers {
         let mut next: Vec<usize> = ring
@@ -283,6 +315,25 @@ mod tests {
             } else {
                 assert_eq!(layer[f], UNREACHED, "{p:?}");
                 assert_eq!(values[f], -1.0, "{p:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn dilation_marks_exactly_the_faces_next_to_the_mask() {
+        // Against the 26-neighbour definition on boxes that wrap (also across two and one
+        // faces) and that do not, with a scrambled sparse mask.
+        for (dims, periodic) in [
+            ([5, 4, 3], [false; 3]),
+            ([5, 2, 3], [true, true, false]),
+            ([4, 3, 1], [false, true, true]),
+        ] {
+            let n = dims[0] * dims[1] * dims[2];
+            let mask: Vec<bool> = (0..n).map(|f| (f * 7 + 3) % 11 == 0).collect();
+            let grown = dilate(dims, periodic, mask.clone());
+            for f in 0..n {
+                let near = neighbours(dims, periodic, unidx(dims, f)).any(|m| mask[m]);
+                assert_eq!(grown[f], mask[f] || near, "{dims:?} {periodic:?} face {f}");
             }
         }
     }
