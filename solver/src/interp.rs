@@ -1,6 +1,7 @@
-//! Interpolation of one staggered velocity component at an arbitrary point: trilinear, or a
-//! tensor product of 1D monotone cubic Hermite interpolants (Fritsch–Carlson slope limiting),
-//! which never leaves the range of the samples it uses. Clamped at walls, wrapped when periodic.
+//! Interpolation of one staggered velocity component (or, trilinear, all three at once) at an
+//! arbitrary point: trilinear, or a tensor product of 1D monotone cubic Hermite interpolants
+//! (Fritsch–Carlson slope limiting), which never leaves the range of the samples it uses.
+//! Clamped at walls, wrapped when periodic.
 
 use crate::config::Interpolation;
 use crate::layout::{idx, Layout};

@@ -43,7 +43,8 @@ pub(crate) struct Multigrid<'a, T: Real = f64> {
     /// Per level, the inverse pivots of each x-row's tridiagonal block (0 where the diagonal
     /// is not positive); empty without line smoothing.
     pivots: Vec<Vec<T>>,
-    /// Smoothing sweep pairs before and after each coarse correction.
+    /// Smoothing sweep pairs before and after each coarse correction (at least one: the first
+    /// starts from the zero guess).
     smooth: usize,
 }
 
