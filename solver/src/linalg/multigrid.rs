@@ -330,7 +330,7 @@ fn restrict_residual<T: Real>(a: &Stencil7<T>, b: &[T], x: &[T], cd: [usize; 3],
             }
             for (ic, oi) in o.iter_mut().enumerate() {
                 let mut s = T::ZERO;
-                for (q, _) in present.iter().enumerate().filter(|(_, &p)| p) {
+                for q in (0..4).filter(|&q| present[q]) {
                     for di in 0..2 {
                         let i = 2 * ic + di;
                         if i < nx {
