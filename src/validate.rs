@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use polyphase_scenes::Scene;
+use polyphase_scenes::{Scene, TrackerKind};
 use serde_json::{json, Value};
 
 use crate::run::{self, RunOptions};
@@ -168,6 +168,13 @@ fn run_case(case: &Case, out: &Path, quick: bool) -> Result<Vec<Outcome>> {
     let metrics = &case.file.metrics;
     let label = |m: &case::MetricSpec| format!("case '{}', metric '{}'", case.name, m.name);
     if metrics.iter().all(|m| indicator::is_static(&m.kind)) {
+        if case.file.tracker == Some(TrackerKind::Front) {
+            bail!(
+                "case '{}': first-step metrics measure the contouring tracker (paper 004 \
+                 Table 2), not tracker = \"front\"",
+                case.name
+            );
+        }
         let scene = polyphase_scenes::load(&case.scene_arg())?.with_overrides(resolution, None)?;
         let samples = metrics.iter().find_map(|m| m.samples);
         let first = indicator::FirstStep::measure(&scene, samples);
@@ -187,7 +194,7 @@ fn run_case(case: &Case, out: &Path, quick: bool) -> Result<Vec<Outcome>> {
         out: Some(out.to_path_buf()),
         resolution,
         frames: None,
-        tracker: None,
+        tracker: case.file.tracker,
         resume: false,
     })
     .with_context(|| format!("case '{}'", case.name))?;

@@ -60,6 +60,15 @@ fn shipped_cases_pass_in_their_quick_versions() {
         .as_str()
         .unwrap()
         .contains("from the release"));
+    // The static drop with the front tracker: its Laplace jump passes, its spurious currents
+    // are a known gap (issue 15).
+    let front: Vec<&Value> = rows
+        .iter()
+        .filter(|r| r["case"] == "laplace2_front")
+        .collect();
+    assert_eq!(front.len(), 2, "{table}");
+    assert_eq!(front[0]["verdict"], "pass", "{table}");
+    assert_eq!(front[1]["verdict"], "known gap", "{table}");
     // So is Table 2's accuracy on the notched sphere at 128³ (issue 17); its e_i passes.
     let zalesak: Vec<&Value> = rows
         .iter()
@@ -149,6 +158,38 @@ tolerance = 0.05
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(!o.status.success(), "{out}");
     assert!(out.contains("FAIL: passes, remove known_gap"), "{out}");
+
+    // First-step metrics measure the contouring tracker (paper 004 Table 2): a case that asks
+    // for the front tracker is refused by name, before anything runs.
+    let first = dir.join("front_first_step");
+    fs::create_dir_all(&first).unwrap();
+    fs::write(
+        first.join("case.toml"),
+        r#"description = "Table 2 with the wrong tracker"
+scene = "builtin:zalesak"
+tracker = "front"
+source = "paper 004 Table 2"
+quick_resolution = 32
+
+[[metric]]
+name = "indicator accuracy (%)"
+kind = "indicator_accuracy"
+table = [[32, 99.9517, 1.30]]
+tolerance = 0.15
+"#,
+    )
+    .unwrap();
+    let o = validate_quick(&dir, &first);
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(!o.status.success(), "{out}");
+    assert!(
+        out.contains("case 'front_first_step'") && out.contains("not tracker = \"front\""),
+        "{out}"
+    );
+    assert!(err.contains("front_first_step: did not run"), "{err}");
 
     let o = polyphase(&["validate", "no_such_case"]);
     let err = String::from_utf8_lossy(&o.stderr);

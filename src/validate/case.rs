@@ -23,6 +23,10 @@ pub struct CaseFile {
     /// Tracker resolution of the coarse version `--quick` runs (the full version's otherwise).
     #[serde(default)]
     pub quick_resolution: Option<i64>,
+    /// The tracker the scene runs with, when not the scene's own (`"contour"` or `"front"`):
+    /// one scene file serves a case per tracker.
+    #[serde(default)]
+    pub tracker: Option<polyphase_scenes::TrackerKind>,
     /// What is compared, each with its tolerance.
     #[serde(rename = "metric")]
     pub metrics: Vec<MetricSpec>,
