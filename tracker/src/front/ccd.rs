@@ -38,6 +38,7 @@
 //! miss: in the first case some point of the domain has `|F|∞ ≤ δ + 2 ε`, i.e. the primitives
 //! come within `√3 (δ + 2 ε)` of each other. Inputs must be finite with `|x| < 1e150`.
 
+use crate::front::response::proximity::{point_triangle_closest, segment_segment_closest};
 use glam::DVec3;
 
 /// Relative near-miss tolerance `δ / extent` (see the module doc): pairs closer than about
@@ -85,7 +86,9 @@ pub fn vertex_triangle_hit(x0: &[DVec3; 4], x1: &[DVec3; 4]) -> Option<Hit> {
         tlo = tlo.min(lo);
         thi = thi.max(hi);
     }
-    if !boxes_overlap(plo, phi, tlo, thi) {
+    if !boxes_overlap(plo, phi, tlo, thi)
+        || separated_by_closest_points(Kind::VertexTriangle, x0, x1)
+    {
         return None;
     }
     search(Kind::VertexTriangle, x0, x1)
@@ -101,7 +104,7 @@ pub fn edge_edge_hit(x0: &[DVec3; 4], x1: &[DVec3; 4]) -> Option<Hit> {
     };
     let (alo, ahi) = sweep(0, 1);
     let (blo, bhi) = sweep(2, 3);
-    if !boxes_overlap(alo, ahi, blo, bhi) {
+    if !boxes_overlap(alo, ahi, blo, bhi) || separated_by_closest_points(Kind::EdgeEdge, x0, x1) {
         return None;
     }
     search(Kind::EdgeEdge, x0, x1)
@@ -110,6 +113,51 @@ pub fn edge_edge_hit(x0: &[DVec3; 4], x1: &[DVec3; 4]) -> Option<Hit> {
 /// Closed boxes overlap (exact comparisons).
 pub fn boxes_overlap(alo: DVec3, ahi: DVec3, blo: DVec3, bhi: DVec3) -> bool {
     alo.cmple(bhi).all() && blo.cmple(ahi).all()
+}
+
+/// `true` if one fixed direction keeps the two primitives apart over the whole motion, by more
+/// than twice the near-miss distance `δ` of [`search`]: the direction `n` from the second
+/// primitive's closest point to the first's at `t = 1/2`. The gap along `n` between a point of
+/// each primitive is smallest at a corner pair and affine in `t`, so positive gaps at both ends
+/// for every corner pair prove it throughout. This is the cheap verdict for the common pair of
+/// nearby primitives that move together (neighbours on a smooth surface), where the per-coordinate
+/// ranges and the triangle normal of [`separated_along`] separate nothing until the boxes are
+/// small. A pair this test passes is one [`search`] would also pass (its near misses lie within
+/// `√3 (δ + 2 ε) < 2 δ`), so results do not change, only their cost.
+fn separated_by_closest_points(kind: Kind, x0: &[DVec3; 4], x1: &[DVec3; 4]) -> bool {
+    let m: [DVec3; 4] = std::array::from_fn(|i| x0[i] + 0.5 * (x1[i] - x0[i]));
+    let (n, pairs): (DVec3, &[(usize, usize)]) = match kind {
+        Kind::VertexTriangle => {
+            let w = point_triangle_closest(m[0], m[1], m[2], m[3]);
+            let q = w[0] * m[1] + w[1] * m[2] + w[2] * m[3];
+            (m[0] - q, &[(0, 1), (0, 2), (0, 3)])
+        }
+        Kind::EdgeEdge => {
+            let (s, t) = segment_segment_closest(m[0], m[1], m[2], m[3]);
+            let p = m[0] + s * (m[1] - m[0]);
+            let q = m[2] + t * (m[3] - m[2]);
+            (p - q, &[(0, 2), (0, 3), (1, 2), (1, 3)])
+        }
+    };
+    if n == DVec3::ZERO || !n.is_finite() {
+        return false;
+    }
+    let (lo, hi) = x0
+        .iter()
+        .chain(x1.iter())
+        .fold((x0[0], x0[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let delta = NEAR_MISS_REL * (hi - lo).max_element();
+    // Each gap `n · (x_i − x_j)` errs by at most `4 · 2⁻⁵³ Σ |n_k| |x_ik − x_jk|` (one rounded
+    // difference, three products, two sums), bounded here with a margin.
+    let na = n.abs();
+    let margin = 2.0 * delta * n.length() * (1.0 + 1e-12);
+    [x0, x1].iter().all(|x| {
+        pairs.iter().all(|&(i, j)| {
+            let f = x[i] - x[j];
+            let slack = 4.0 * f64::EPSILON * na.dot(f.abs()) * (1.0 + 1e-12) + f64::MIN_POSITIVE;
+            n.dot(f) - slack > margin
+        })
+    })
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]

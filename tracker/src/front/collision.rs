@@ -159,85 +159,64 @@ impl<'a> Detector<'a> {
         self.detect_among(x0, x1, Some(changed))
     }
 
+    /// Every contact of pairs with a vertex flagged in `changed` (all pairs when `None`).
+    /// A full detection queries a grid of every swept box from every triangle. A restricted
+    /// one (collision response rounds, where few vertices changed) queries a grid of only the
+    /// touched triangles' boxes, so each triangle finds just its touched neighbours; a pair
+    /// with one touched triangle is then seen from the other triangle only, which tests it
+    /// both ways ([`Detector::test_pair`]). Either way each primitive pair is tested once, and
+    /// the sorted result is the same.
     fn detect_among(&self, x0: &[DVec3], x1: &[DVec3], changed: Option<&[bool]>) -> Vec<Contact> {
         let triangles = self.triangles;
-        let touched =
-            |t: u32| changed.is_none_or(|c| triangles[t as usize].iter().any(|&v| c[v as usize]));
         let boxes: Vec<(DVec3, DVec3)> = triangles
             .par_iter()
             .map(|t| swept_triangle_box(t, x0, x1))
             .collect();
-        let cell = cell_size_for(&boxes);
-        let grid = StaticGrid::build(boxes, cell);
         let edge_boxes: Vec<(DVec3, DVec3)> = self
             .edges
             .par_iter()
             .map(|e| sweep_box(e.iter().flat_map(|&v| [x0[v as usize], x1[v as usize]])))
             .collect();
+        let touched: Option<Vec<bool>> = changed.map(|c| {
+            triangles
+                .par_iter()
+                .map(|tri| !is_removed(tri) && tri.iter().any(|&v| c[v as usize]))
+                .collect()
+        });
+        // The grid's triangles: all of them, or the touched ones (`ids` maps grid entries back).
+        let ids: Option<Vec<u32>> = touched.as_ref().map(|touched| {
+            (0..triangles.len() as u32)
+                .filter(|&t| touched[t as usize])
+                .collect()
+        });
+        let grid_boxes: Vec<(DVec3, DVec3)> = match &ids {
+            None => boxes.clone(),
+            Some(ids) => ids.iter().map(|&t| boxes[t as usize]).collect(),
+        };
+        let cell = cell_size_for(&boxes);
+        let grid = StaticGrid::build(grid_boxes, cell);
+        let pair = Pair {
+            detector: self,
+            x0,
+            x1,
+            boxes: &boxes,
+            edge_boxes: &edge_boxes,
+        };
         let per_triangle: Vec<(Vec<Contact>, Vec<Contact>)> = (0..triangles.len() as u32)
             .into_par_iter()
             .map_init(Vec::new, |cand, t| {
-                let tri = triangles[t as usize];
-                if is_removed(&tri) {
-                    return (Vec::new(), Vec::new());
-                }
-                let own_vertices: Vec<u32> = tri
-                    .iter()
-                    .copied()
-                    .filter(|&v| self.vertex_owner[v as usize] == t)
-                    .collect();
-                let own_edges: Vec<u32> = self.tri_edges[t as usize]
-                    .iter()
-                    .copied()
-                    .filter(|&e| self.edge_owner[e as usize] == t)
-                    .collect();
                 let (mut vt, mut ee) = (Vec::new(), Vec::new());
-                if own_vertices.is_empty() && own_edges.is_empty() {
+                if is_removed(&triangles[t as usize]) {
                     return (vt, ee);
                 }
-                let (lo, hi) = grid.boxes()[t as usize];
+                let (lo, hi) = boxes[t as usize];
                 grid.query(lo, hi, cand);
-                let t_touched = touched(t);
-                for &s in cand.iter() {
-                    if s == t || !(t_touched || touched(s)) {
-                        continue;
-                    }
-                    let other = triangles[s as usize];
-                    let (slo, shi) = grid.boxes()[s as usize];
-                    for &v in &own_vertices {
-                        let (p, q) = (x0[v as usize], x1[v as usize]);
-                        if !other.contains(&v)
-                            && boxes_overlap(p.min(q), p.max(q), slo, shi)
-                            && vertex_triangle_moves_into(v, &other, x0, x1)
-                        {
-                            vt.push(Contact::VertexTriangle {
-                                vertex: v,
-                                triangle: s,
-                            });
-                        }
-                    }
-                    if s < t {
-                        continue;
-                    }
-                    for &e in &own_edges {
-                        let ea = self.edges[e as usize];
-                        let (elo, ehi) = edge_boxes[e as usize];
-                        for &f in &self.tri_edges[s as usize] {
-                            if self.edge_owner[f as usize] != s {
-                                continue;
-                            }
-                            let eb = self.edges[f as usize];
-                            let (flo, fhi) = edge_boxes[f as usize];
-                            if !shares_vertex(&ea, &eb)
-                                && boxes_overlap(elo, ehi, flo, fhi)
-                                && edge_edge_moves_into(&ea, &eb, x0, x1)
-                            {
-                                ee.push(Contact::EdgeEdge {
-                                    a: ea.min(eb),
-                                    b: ea.max(eb),
-                                });
-                            }
-                        }
+                // A triangle outside the grid meets only touched ones, none of which sees it.
+                let both_ways = touched.as_ref().is_some_and(|touched| !touched[t as usize]);
+                for &entry in cand.iter() {
+                    let s = ids.as_ref().map_or(entry, |ids| ids[entry as usize]);
+                    if s != t {
+                        pair.test(t, s, both_ways, &mut vt, &mut ee);
                     }
                 }
                 (vt, ee)
@@ -252,6 +231,88 @@ impl<'a> Detector<'a> {
         ee.par_sort_unstable();
         vt.extend(ee);
         vt
+    }
+
+    /// The vertices and edges `t` owns.
+    fn owned(
+        &self,
+        t: u32,
+    ) -> (
+        impl Iterator<Item = u32> + '_,
+        impl Iterator<Item = u32> + '_,
+    ) {
+        let vertices = self.triangles[t as usize]
+            .into_iter()
+            .filter(move |&v| self.vertex_owner[v as usize] == t);
+        let edges = self.tri_edges[t as usize]
+            .into_iter()
+            .filter(move |&e| self.edge_owner[e as usize] == t);
+        (vertices, edges)
+    }
+}
+
+/// One detection's motion and swept boxes, for testing the primitives of triangle pairs.
+struct Pair<'d, 'a> {
+    detector: &'d Detector<'a>,
+    x0: &'d [DVec3],
+    x1: &'d [DVec3],
+    boxes: &'d [(DVec3, DVec3)],
+    edge_boxes: &'d [(DVec3, DVec3)],
+}
+
+impl Pair<'_, '_> {
+    /// Tests the primitives `t` owns against `s`: its vertices against triangle `s`, and its
+    /// edges against the edges `s` owns when `s > t` (the lower triangle tests a pair's edges).
+    /// `both_ways`: also `s`'s vertices against `t`, and the edges whatever the order, for a
+    /// pair that is seen from `t` only.
+    fn test(&self, t: u32, s: u32, both_ways: bool, vt: &mut Vec<Contact>, ee: &mut Vec<Contact>) {
+        self.vertices_against(t, s, vt);
+        if both_ways {
+            self.vertices_against(s, t, vt);
+        }
+        if !(both_ways || s > t) {
+            return;
+        }
+        let d = self.detector;
+        let (_, own_edges) = d.owned(t);
+        for e in own_edges {
+            let ea = d.edges[e as usize];
+            let (elo, ehi) = self.edge_boxes[e as usize];
+            let (_, other_edges) = d.owned(s);
+            for f in other_edges {
+                let eb = d.edges[f as usize];
+                let (flo, fhi) = self.edge_boxes[f as usize];
+                if !shares_vertex(&ea, &eb)
+                    && boxes_overlap(elo, ehi, flo, fhi)
+                    && edge_edge_moves_into(&ea, &eb, self.x0, self.x1)
+                {
+                    ee.push(Contact::EdgeEdge {
+                        a: ea.min(eb),
+                        b: ea.max(eb),
+                    });
+                }
+            }
+        }
+    }
+
+    /// The vertices `t` owns against triangle `s`.
+    fn vertices_against(&self, t: u32, s: u32, vt: &mut Vec<Contact>) {
+        let d = self.detector;
+        let other = d.triangles[s as usize];
+        let (slo, shi) = self.boxes[s as usize];
+        let (own_vertices, _) = d.owned(t);
+        for v in own_vertices {
+            let (p, q) = (self.x0[v as usize], self.x1[v as usize]);
+            if !other.contains(&v)
+                && boxes_overlap(p.min(q), p.max(q), slo, shi)
+                && vertex_triangle_moves_into(v, &other, self.x0, self.x1)
+            {
+                vt.push(Contact::VertexTriangle {
+                    vertex: v,
+                    triangle: s,
+                });
+            }
+        }
     }
 }
 

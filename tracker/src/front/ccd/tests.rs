@@ -230,3 +230,35 @@ fn hit_locates_the_contact() {
         "{hit:?}"
     );
 }
+
+/// The closest-point direction only ever settles pairs the search would settle too (its
+/// doc's argument), on pairs that move nearly together as neighbours on a moving surface do:
+/// a common translation, small relative motions, many within the near-miss range or touching.
+#[test]
+fn closest_point_separation_never_contradicts_the_search() {
+    let mut rng = Rng(21);
+    let (mut settled, mut contacts) = (0, 0);
+    for i in 0..20000 {
+        let common = 0.5 * rng.v();
+        // Relative motions from large down to a thousandth of the primitives' size.
+        let relative = [0.5, 0.05, 1e-3][i % 3];
+        let mut x0: [DVec3; 4] = std::array::from_fn(|_| rng.v());
+        if i % 2 == 0 {
+            // Nearly coplanar, as neighbours on a smooth surface.
+            for p in &mut x0 {
+                p.z *= 1e-3;
+            }
+        }
+        let x1: [DVec3; 4] = std::array::from_fn(|k| x0[k] + common + relative * rng.v());
+        for kind in [Kind::VertexTriangle, Kind::EdgeEdge] {
+            let found = search(kind, &x0, &x1).is_some();
+            contacts += found as usize;
+            if separated_by_closest_points(kind, &x0, &x1) {
+                settled += 1;
+                assert!(!found, "{x0:?} -> {x1:?}");
+            }
+        }
+    }
+    // Both verdicts were exercised.
+    assert!(settled > 10000 && contacts > 1000, "{settled} {contacts}");
+}

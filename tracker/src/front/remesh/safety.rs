@@ -8,7 +8,7 @@
 use glam::DVec3;
 
 use super::Remesher;
-use crate::front::ccd::{edge_edge, vertex_triangle};
+use crate::front::ccd::{boxes_overlap, edge_edge, vertex_triangle};
 
 impl Remesher<'_> {
     /// Is the motion of `moving` to `targets` collision-free? `merging`: the two ends of a
@@ -32,6 +32,10 @@ impl Remesher<'_> {
         safe
     }
 
+    /// Tests each primitive pair with a moving vertex once: moving vertices against every
+    /// nearby triangle, nearby still vertices against the moving triangles, and moving edges
+    /// against every nearby edge (a pair of triangles holds up to 15 such pairs, and a fan
+    /// around one moving vertex would test that vertex once per fan triangle).
     fn check_motion(&self, moving: &[u32], merging: Option<[u32; 2]>) -> bool {
         let alias = |v: u32| match merging {
             Some([a, b]) if v == b => a,
@@ -40,6 +44,17 @@ impl Remesher<'_> {
         let moves = |v: u32| moving.contains(&v);
         let x0 = &self.c.mesh.vertices;
         let x1 = &self.x1;
+        let swept = |v: u32| {
+            let (p, q) = (x0[v as usize], x1[v as usize]);
+            (p.min(q), p.max(q))
+        };
+        let union = |a: (DVec3, DVec3), b: (DVec3, DVec3)| (a.0.min(b.0), a.1.max(b.1));
+        let swept_of = |vs: &[u32]| {
+            vs.iter()
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |b, &v| {
+                    union(b, swept(v))
+                })
+        };
         let mut tris: Vec<u32> = moving
             .iter()
             .flat_map(|&v| self.c.vertex_triangles(v).iter().copied())
@@ -49,84 +64,86 @@ impl Remesher<'_> {
         tris.dedup();
         // Candidates: everything near the union of the swept boxes, moving triangles included
         // (their start boxes lie inside it), so moving–moving pairs are tested too.
-        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for &t in &tris {
-            for v in self.c.triangle(t) {
-                let (p, q) = (x0[v as usize], x1[v as usize]);
-                lo = lo.min(p).min(q);
-                hi = hi.max(p).max(q);
-            }
-        }
+        let (lo, hi) = tris
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |b, &t| {
+                union(b, swept_of(&self.c.triangle(t)))
+            });
         let mut near = Vec::new();
         self.grid.query(lo, hi, &mut near);
-        // Swept boxes: two triangles whose boxes are disjoint cannot meet during the motion,
-        // which settles most candidates of the union box before any CCD test.
-        let swept = |tri: [u32; 3]| {
-            tri.iter()
-                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &v| {
-                    let (p, q) = (x0[v as usize], x1[v as usize]);
-                    (lo.min(p).min(q), hi.max(p).max(q))
-                })
+        near.retain(|&s| self.c.is_live(s));
+        let overlap = |a: (DVec3, DVec3), b: (DVec3, DVec3)| boxes_overlap(a.0, a.1, b.0, b.1);
+        let vertex_hits = |v: u32, tri: [u32; 3]| {
+            let ids = [v, tri[0], tri[1], tri[2]];
+            vertex_triangle(&ids.map(|i| x0[i as usize]), &ids.map(|i| x1[i as usize]))
         };
-        // Each candidate's corners and swept box, once for all moving triangles.
-        let candidates: Vec<(u32, [u32; 3], (DVec3, DVec3))> = near
+        // Each nearby triangle's corners and swept box (two disjoint boxes never meet).
+        let candidates: Vec<([u32; 3], (DVec3, DVec3))> = near
             .iter()
-            .filter(|&&s| self.c.is_live(s))
             .map(|&s| {
                 let sv = self.c.triangle(s);
-                (s, sv, swept(sv))
+                (sv, swept_of(&sv))
             })
             .collect();
+        // Moving vertices against every nearby triangle.
+        for &v in moving {
+            let (va, vb) = (alias(v), swept(v));
+            for &(sv, sb) in &candidates {
+                if !sv.map(alias).contains(&va) && overlap(vb, sb) && vertex_hits(v, sv) {
+                    return false;
+                }
+            }
+        }
+        // Still vertices near the moving triangles against them.
+        let mut still: Vec<u32> = candidates
+            .iter()
+            .flat_map(|(sv, _)| sv.iter().copied())
+            .filter(|&u| !moves(u))
+            .collect();
+        still.sort_unstable();
+        still.dedup();
         for &t in &tris {
             let tv = self.c.triangle(t);
-            let (tlo, thi) = swept(tv);
-            for &(s, sv, (slo, shi)) in &candidates {
-                if s == t {
+            let (tb, ta) = (swept_of(&tv), tv.map(alias));
+            for &u in &still {
+                if !ta.contains(&alias(u)) && overlap(swept(u), tb) && vertex_hits(u, tv) {
+                    return false;
+                }
+            }
+        }
+        // Moving edges against every nearby edge.
+        let edges_of = |tv: [u32; 3]| (0..3).map(move |i| sorted([tv[i], tv[(i + 1) % 3]]));
+        let mut moving_edges: Vec<[u32; 2]> = tris
+            .iter()
+            .flat_map(|&t| edges_of(self.c.triangle(t)))
+            .filter(|e| e.iter().any(|&u| moves(u)))
+            .collect();
+        moving_edges.sort_unstable();
+        moving_edges.dedup();
+        let mut near_edges: Vec<[u32; 2]> = candidates
+            .iter()
+            .flat_map(|&(sv, _)| edges_of(sv))
+            .collect();
+        near_edges.sort_unstable();
+        near_edges.dedup();
+        for &e in &moving_edges {
+            let (eb, ea) = (swept_of(&e), e.map(alias));
+            for &f in &near_edges {
+                let fa = f.map(alias);
+                if ea.iter().any(|v| fa.contains(v)) || !overlap(eb, swept_of(&f)) {
                     continue;
                 }
-                if tlo.cmpgt(shi).any() || slo.cmpgt(thi).any() {
-                    continue;
-                }
-                let ta = tv.map(alias);
-                let sa = sv.map(alias);
-                // Vertex of one against the other triangle.
-                for (verts, va, tri) in [(sv, sa, tv), (tv, ta, sv)] {
-                    let tri_a = tri.map(alias);
-                    for (&v, &v_alias) in verts.iter().zip(&va) {
-                        if tri_a.contains(&v_alias) || !(moves(v) || tri.iter().any(|&u| moves(u)))
-                        {
-                            continue;
-                        }
-                        let ids = [v, tri[0], tri[1], tri[2]];
-                        let p0 = ids.map(|i| x0[i as usize]);
-                        let p1 = ids.map(|i| x1[i as usize]);
-                        if vertex_triangle(&p0, &p1) {
-                            return false;
-                        }
-                    }
-                }
-                // Edge against edge.
-                for i in 0..3 {
-                    let e = [tv[i], tv[(i + 1) % 3]];
-                    for j in 0..3 {
-                        let f = [sv[j], sv[(j + 1) % 3]];
-                        let ea = e.map(alias);
-                        let fa = f.map(alias);
-                        if ea.iter().any(|v| fa.contains(v))
-                            || !(e.iter().chain(&f).any(|&u| moves(u)))
-                        {
-                            continue;
-                        }
-                        let ids = [e[0], e[1], f[0], f[1]];
-                        let p0 = ids.map(|i| x0[i as usize]);
-                        let p1 = ids.map(|i| x1[i as usize]);
-                        if edge_edge(&p0, &p1) {
-                            return false;
-                        }
-                    }
+                let ids = [e[0], e[1], f[0], f[1]];
+                if edge_edge(&ids.map(|i| x0[i as usize]), &ids.map(|i| x1[i as usize])) {
+                    return false;
                 }
             }
         }
         true
     }
+}
+
+/// The edge `[a, b]` with its ends in ascending order.
+fn sorted([a, b]: [u32; 2]) -> [u32; 2] {
+    [a.min(b), a.max(b)]
 }
