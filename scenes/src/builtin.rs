@@ -98,7 +98,7 @@ pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
 
 #[cfg(test)]
 mod tests {
-    use polyphase_tracker::front::params::FrontParams;
+    use polyphase_tracker::front::params::{FrontParams, PASSIVE_CFL};
 
     use super::*;
     use crate::{TrackerKind, TrackerSpec};
@@ -123,10 +123,15 @@ mod tests {
         let short = Scene::parse(&short, "short").unwrap();
         let table = Scene::parse(&table, "table").unwrap();
         assert_eq!(short.file.tracker.kind, TrackerKind::Front);
+        // zalesak is passive: the unset step bound resolves to the passive one.
         let defaults = FrontParams::default();
-        assert_eq!(short.file.tracker.front.as_ref(), Some(&defaults));
+        let resolved = FrontParams {
+            cfl: Some(PASSIVE_CFL),
+            ..defaults.clone()
+        };
+        assert_eq!(short.file.tracker.front.as_ref(), Some(&resolved));
         let front = table.file.tracker.front.clone().unwrap();
-        assert_eq!(front.cfl, 0.5);
+        assert_eq!(front.cfl, Some(0.5));
         assert_eq!(front.max_edge, defaults.max_edge);
         let again = Scene::parse(&table.to_toml(), "resolved").unwrap();
         assert_eq!(again.file.tracker, table.file.tracker);
@@ -138,6 +143,23 @@ mod tests {
             Scene::parse(good, "contour").unwrap().file.tracker,
             TrackerSpec::default()
         );
+    }
+
+    /// Passive runs step 3 L by default (the paper's code's step), coupled runs and
+    /// mesh-driven flows 1 L, and a scene's own value is kept.
+    #[test]
+    fn the_front_step_bound_defaults_by_what_moves_the_mesh() {
+        let cfl = |name: &str, extra: &str| {
+            let text = format!("{}{extra}", builtin_text(name));
+            let scene = Scene::parse(&text, name).unwrap();
+            let scene = scene.with_tracker(TrackerKind::Front).unwrap();
+            scene.file.tracker.front.unwrap().cfl
+        };
+        assert_eq!(cfl("enright", ""), Some(PASSIVE_CFL));
+        assert_eq!(cfl("dambreak_column", ""), Some(1.0));
+        assert_eq!(cfl("merge2", ""), Some(1.0));
+        let own = "\n[tracker]\nkind = \"front\"\n[tracker.front]\ncfl = 2.0\n";
+        assert_eq!(cfl("enright", own), Some(2.0));
     }
 
     #[test]

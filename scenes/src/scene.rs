@@ -9,7 +9,7 @@ use crate::error::SceneError;
 use crate::measure::{compile_measures, Measure};
 use crate::tension::{compile_tension, Tension};
 use polyphase_tracker::front::flow::{CurlNoise, MeshFlow, PairSpeed};
-use polyphase_tracker::front::params::FrontParams;
+use polyphase_tracker::front::params::{FrontParams, PASSIVE_CFL};
 
 use crate::format::{
     BoundaryKind, BoundarySpec, HalfSpaceSpec, PairSpeedSpec, PhaseSpec, SceneFile, ShapeSpec,
@@ -116,6 +116,12 @@ impl Scene {
                  tracker = \"front\""
                     .into(),
             ));
+        }
+        if let Some(front) = &mut file.tracker.front {
+            let passive = ratio.is_none() && mesh_flow.is_none();
+            front
+                .cfl
+                .get_or_insert(if passive { PASSIVE_CFL } else { 1.0 });
         }
         let base = SceneBase::from_origin(origin);
         let mut shapes = file

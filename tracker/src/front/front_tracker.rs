@@ -241,7 +241,7 @@ impl FrontTracker {
                     FlowStep::Vertices(v) => v.iter().map(|v| v.length()).fold(0.0, f64::max),
                     FlowStep::Field(noise) => noise.max_speed(),
                 };
-                let limit = flow.travel_fraction() * self.params.cfl * self.target / speed;
+                let limit = flow.travel_fraction() * self.params.cfl() * self.target / speed;
                 // A remainder within a thousandth of the limit is taken whole, so no
                 // vanishing substep follows.
                 if h <= 1.001 * limit {
@@ -506,7 +506,7 @@ impl InterfaceTracker for FrontTracker {
 
     /// `cfl` target edge lengths (paper 000 moves at most about one edge length per step).
     fn max_travel(&self) -> f64 {
-        self.params.cfl * self.target
+        self.params.cfl() * self.target
     }
 
     fn phi_chi(&self, x: DVec3) -> (f64, PhaseId) {
