@@ -165,16 +165,21 @@ impl Connectivity {
 
     /// Every edge of a live triangle once, as `[a, b]` with `a < b`, sorted.
     pub fn edges(&self) -> Vec<[u32; 2]> {
-        let mut out: Vec<[u32; 2]> = self
-            .mesh
-            .triangles
-            .iter()
-            .filter(|t| **t != DEAD)
-            .flat_map(|&[a, b, c]| [[a, b], [b, c], [c, a]])
-            .map(|[a, b]| [a.min(b), a.max(b)])
-            .collect();
-        out.sort_unstable();
-        out.dedup();
+        // Vertex by vertex, each vertex's higher neighbours: sorted without sorting them all.
+        let mut out: Vec<[u32; 2]> = Vec::with_capacity(3 * self.vertex_triangles.len());
+        let mut higher: Vec<u32> = Vec::new();
+        for (a, list) in self.vertex_triangles.iter().enumerate() {
+            let a = a as u32;
+            higher.clear();
+            higher.extend(
+                list.iter()
+                    .flat_map(|&t| self.mesh.triangles[t as usize])
+                    .filter(|&b| b > a),
+            );
+            higher.sort_unstable();
+            higher.dedup();
+            out.extend(higher.iter().map(|&b| [a, b]));
+        }
         out
     }
 

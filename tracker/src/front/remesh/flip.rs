@@ -29,21 +29,27 @@ impl Remesher<'_> {
     /// else 4 (non-manifold geometry trimmed off, Appendix A.1).
     fn patch_valence(&self, v: u32, labels: [u16; 2]) -> (i64, i64) {
         let same = |l: [u16; 2]| l == labels || l == [labels[1], labels[0]];
-        let mut nb: Vec<u32> = Vec::new();
+        // Each neighbour with the triangles at `v` it shares within the patch and in all, the
+        // latter being the valence of its edge to `v` (the incidence lists hold every live
+        // triangle).
+        let mut nb: Vec<(u32, u32, u32)> = Vec::with_capacity(16);
         let mut interior = true;
         for &t in self.c.vertex_triangles(v) {
-            if same(self.c.labels(t)) {
-                nb.extend(self.c.triangle(t).iter().filter(|&&u| u != v));
-            } else {
-                interior = false;
+            let in_patch = same(self.c.labels(t)) as u32;
+            interior &= in_patch == 1;
+            for u in self.c.triangle(t).into_iter().filter(|&u| u != v) {
+                match nb.iter_mut().find(|(w, _, _)| *w == u) {
+                    Some((_, inside, all)) => {
+                        *inside += in_patch;
+                        *all += 1;
+                    }
+                    None => nb.push((u, in_patch, 1)),
+                }
             }
         }
-        nb.sort_unstable();
-        nb.dedup();
-        if interior && nb.iter().any(|&u| self.c.edge_valence(v, u) != 2) {
-            interior = false;
-        }
-        (nb.len() as i64, if interior { 6 } else { 4 })
+        let valence = nb.iter().filter(|&&(_, inside, _)| inside > 0).count() as i64;
+        interior &= nb.iter().all(|&(_, _, all)| all == 2);
+        (valence, if interior { 6 } else { 4 })
     }
 
     /// Flips edge `(a, b)` if it is a manifold non-feature edge, the valences improve (or
