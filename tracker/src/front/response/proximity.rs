@@ -140,6 +140,15 @@ pub fn proximity_pairs(
         .flatten()
         .collect();
     let (edges, tri_edges) = (topology.edges(), topology.tri_edges());
+    // Edge boxes padded by h: two edges closer than h have overlapping padded boxes, which
+    // settles most candidates before any distance is computed.
+    let edge_boxes: Vec<(DVec3, DVec3)> = edges
+        .par_iter()
+        .map(|&[a, b]| {
+            let (p, q) = (x[a as usize], x[b as usize]);
+            (p.min(q) - pad, p.max(q) + pad)
+        })
+        .collect();
     let ee: Vec<Contact> = (0..edges.len() as u32)
         .into_par_iter()
         .map_init(
@@ -156,8 +165,13 @@ pub fn proximity_pairs(
                 );
                 others.sort_unstable();
                 others.dedup();
+                let (elo, ehi) = edge_boxes[e as usize];
                 others
                     .iter()
+                    .filter(|&&f| {
+                        let (flo, fhi) = edge_boxes[f as usize];
+                        elo.cmple(fhi).all() && flo.cmple(ehi).all()
+                    })
                     .map(|&f| edges[f as usize])
                     .filter(|eb| {
                         !ea.iter().any(|v| eb.contains(v))
