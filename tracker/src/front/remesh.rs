@@ -257,7 +257,7 @@ impl<'a> Remesher<'a> {
             let (new_small, new_large) = worst(new);
             (new_small <= self.b.cos_min_angle || new_small < old_small)
                 && (new_large >= self.b.cos_max_angle || new_large > old_large)
-                && new.iter().all(|t| t.area() > self.b.min_area)
+                && smallest_area(new) > self.b.min_area.min(smallest_area(old))
                 && volume_change(old, new) <= max_volume_change
         };
         if !ok {
@@ -379,3 +379,8 @@ pub(crate) fn starting_with(tri: [u32; 3], a: u32, b: u32) -> Option<[u32; 3]> {
 
 #[cfg(test)]
 mod tests;
+
+/// The smallest area among `ts` (+∞ for none).
+fn smallest_area(ts: &[Tri]) -> f64 {
+    ts.iter().map(Tri::area).fold(f64::INFINITY, f64::min)
+}
