@@ -41,9 +41,9 @@ pub struct FrontParams {
     /// Largest triangle angle (degrees) an operation may create unless it improves on the
     /// worst angle it removes (default 170°).
     pub max_angle: f64,
-    /// Smallest triangle area an operation may create, relative to `L²`, unless it improves on
-    /// the smallest area around it (default 1e-4; without the exception a cluster of tiny
-    /// triangles could never be collapsed away, each collapse leaving tiny ones behind).
+    /// Smallest triangle area an operation may create, relative to `L²` (default 1e-4); the
+    /// collapse of an edge far shorter than the collapse bound may go below it when it improves
+    /// on the smallest area around it (`remesh/collapse.rs`).
     pub min_area: f64,
     /// Largest change of any phase volume one operation may cause, relative to `L³`
     /// (default 0.02: a collapse on a smooth surface moves far less, a collapse across a

@@ -13,7 +13,8 @@ use super::{Remesher, Tri};
 use crate::front::connectivity::DEAD;
 
 /// Edges shorter than this fraction of the collapse bound collapse even between two features
-/// or corners: at that size a "feature" is noise. The contoured start puts clusters of such
+/// or corners, and may leave triangles under the area bound that are larger than the smallest
+/// they remove ([`Remesher::bounds_allow_tiny`]): at that size a "feature" is noise. The contoured start puts clusters of such
 /// edges (about `MARGIN` = 1e-3 of its spacing) around every grid node a surface passes
 /// through exactly, which the feature rule otherwise kept for the whole run (`enright` at edge
 /// 0.01: 729 edges under 0.01 L at t = 0.3, 15 with this rule; at 0.1 instead of 0.01 the 32³
@@ -195,7 +196,13 @@ impl Remesher<'_> {
                 return false;
             }
         }
-        if !self.bounds_allow(&old, &new) {
+        let length = (self.c.position(a) - self.c.position(b)).length();
+        let allowed = if length < TINY_EDGE * self.b.min_edge {
+            self.bounds_allow_tiny(&old, &new)
+        } else {
+            self.bounds_allow(&old, &new)
+        };
+        if !allowed {
             return false;
         }
         // Pseudo-motion with the vanishing triangles hidden from the check.
