@@ -231,33 +231,12 @@ impl<'a> Remesher<'a> {
         self.bounds_allow_volume(old, new, self.b.max_volume_change)
     }
 
-    /// [`Self::bounds_allow`] for the collapse of a tiny edge: it may leave triangles under the
-    /// area bound when it improves on the smallest area around it, as the angle bounds allow
-    /// (else a cluster of tiny triangles could never be collapsed away, each collapse leaving
-    /// tiny ones behind). Only there: allowed for every operation, the front's `laplace2_front`
-    /// spurious currents rose from 5.5e-5 to 9.5e-5 m/s at 16 cells.
-    pub(crate) fn bounds_allow_tiny(&mut self, old: &[Tri], new: &[Tri]) -> bool {
-        let floor = self.b.min_area.min(smallest_area(old));
-        self.bounds_allow_with(old, new, self.b.max_volume_change, floor)
-    }
-
     /// [`Self::bounds_allow`] with volume bound `max_volume_change`.
     pub(crate) fn bounds_allow_volume(
         &mut self,
         old: &[Tri],
         new: &[Tri],
         max_volume_change: f64,
-    ) -> bool {
-        self.bounds_allow_with(old, new, max_volume_change, self.b.min_area)
-    }
-
-    /// [`Self::bounds_allow_volume`] with the smallest area `min_area` new triangles may have.
-    fn bounds_allow_with(
-        &mut self,
-        old: &[Tri],
-        new: &[Tri],
-        max_volume_change: f64,
-        min_area: f64,
     ) -> bool {
         let ok = if new.iter().any(|t| t.area().is_nan() || t.area() <= 0.0) {
             false
@@ -278,7 +257,7 @@ impl<'a> Remesher<'a> {
             let (new_small, new_large) = worst(new);
             (new_small <= self.b.cos_min_angle || new_small < old_small)
                 && (new_large >= self.b.cos_max_angle || new_large > old_large)
-                && smallest_area(new) > min_area
+                && smallest_area(new) > self.b.min_area.min(smallest_area(old))
                 && volume_change(old, new) <= max_volume_change
         };
         if !ok {

@@ -13,12 +13,14 @@ use super::{Remesher, Tri};
 use crate::front::connectivity::DEAD;
 
 /// Edges shorter than this fraction of the collapse bound collapse even between two features
-/// or corners, and may leave triangles under the area bound that are larger than the smallest
-/// they remove ([`Remesher::bounds_allow_tiny`]): at that size a "feature" is noise. The contoured start puts clusters of such
+/// or corners: at that size a "feature" is noise. The contoured start puts clusters of such
 /// edges (about `MARGIN` = 1e-3 of its spacing) around every grid node a surface passes
-/// through exactly, which the feature rule otherwise kept for the whole run (`enright` at edge
-/// 0.01: 729 edges under 0.01 L at t = 0.3, 15 with this rule; at 0.1 instead of 0.01 the 32³
-/// full period came back 0.90 h off instead of 0.63 h).
+/// through exactly, which the feature rule and the area bound otherwise kept for the whole run
+/// (`enright` at edge 0.01: 729 edges under 0.01 L at t = 0.3, 15 with this rule and the area
+/// exception of [`FrontParams::min_area`]; at 0.1 instead of 0.01 the 32³ full period came back
+/// 0.90 h off instead of 0.63 h).
+///
+/// [`FrontParams::min_area`]: crate::front::params::FrontParams::min_area
 const TINY_EDGE: f64 = 0.01;
 
 impl Remesher<'_> {
@@ -54,15 +56,6 @@ impl Remesher<'_> {
         done
     }
 
-    /// Is `(a, b)` a tiny edge ([`TINY_EDGE`]) away from the domain walls? On the walls the
-    /// relaxed rules are not used: there they raised `laplace2_front`'s spurious currents from
-    /// 5.7e-5 to 6.5e-5 m/s (the slab's contact curves are features on purpose).
-    fn is_tiny(&self, a: u32, b: u32) -> bool {
-        (self.c.position(a) - self.c.position(b)).length() < TINY_EDGE * self.b.min_edge
-            && !self.c.on_boundary(a)
-            && !self.c.on_boundary(b)
-    }
-
     /// Where edge `(a, b)` collapses to: `(kept vertex, removed vertex, position)`, or `None`
     /// when the collapse would merge two different features (both endpoints on features or
     /// non-manifold curves, joined by an ordinary edge). The fail-safe pass allows it, and so
@@ -76,7 +69,7 @@ impl Remesher<'_> {
             std::cmp::Ordering::Equal => {
                 let joined = va.feature_neighbours.contains(&b);
                 let separate_features = (va.kind != Kind::Smooth || va.non_manifold) && !joined;
-                let tiny = self.is_tiny(a, b);
+                let tiny = (pa - pb).length() < TINY_EDGE * self.b.min_edge;
                 if separate_features && !self.failsafe && !self.junction && !tiny {
                     None
                 } else if va.kind == Kind::Peak && !self.failsafe && !tiny {
@@ -205,12 +198,7 @@ impl Remesher<'_> {
                 return false;
             }
         }
-        let allowed = if self.is_tiny(a, b) {
-            self.bounds_allow_tiny(&old, &new)
-        } else {
-            self.bounds_allow(&old, &new)
-        };
-        if !allowed {
+        if !self.bounds_allow(&old, &new) {
             return false;
         }
         // Pseudo-motion with the vanishing triangles hidden from the check.
