@@ -164,7 +164,7 @@ impl<'a> Detector<'a> {
     /// one (collision response rounds, where few vertices changed) queries a grid of only the
     /// touched triangles' boxes, so each triangle finds just its touched neighbours; a pair
     /// with one touched triangle is then seen from the other triangle only, which tests it
-    /// both ways ([`Detector::test_pair`]). Either way each primitive pair is tested once, and
+    /// both ways ([`Pair::test`]). Either way each primitive pair is tested once, and
     /// the sorted result is the same.
     fn detect_among(&self, x0: &[DVec3], x1: &[DVec3], changed: Option<&[bool]>) -> Vec<Contact> {
         let triangles = self.triangles;
@@ -189,17 +189,21 @@ impl<'a> Detector<'a> {
                 .filter(|&t| touched[t as usize])
                 .collect()
         });
-        let grid_boxes: Vec<(DVec3, DVec3)> = match &ids {
-            None => boxes.clone(),
-            Some(ids) => ids.iter().map(|&t| boxes[t as usize]).collect(),
-        };
         let cell = cell_size_for(&boxes);
-        let grid = StaticGrid::build(grid_boxes, cell);
+        let (grid, kept_boxes) = match &ids {
+            None => (StaticGrid::build(boxes, cell), None),
+            Some(ids) => {
+                let grid_boxes = ids.iter().map(|&t| boxes[t as usize]).collect();
+                (StaticGrid::build(grid_boxes, cell), Some(boxes))
+            }
+        };
+        // Every triangle's swept box: the grid's own in a full detection, else kept aside.
+        let boxes: &[(DVec3, DVec3)] = kept_boxes.as_deref().unwrap_or(grid.boxes());
         let pair = Pair {
             detector: self,
             x0,
             x1,
-            boxes: &boxes,
+            boxes,
             edge_boxes: &edge_boxes,
         };
         let per_triangle: Vec<(Vec<Contact>, Vec<Contact>)> = (0..triangles.len() as u32)
