@@ -127,6 +127,7 @@ mod tests {
         let defaults = FrontParams::default();
         let resolved = FrontParams {
             cfl: Some(PASSIVE_CFL),
+            exact_start: Some(false),
             ..defaults.clone()
         };
         assert_eq!(short.file.tracker.front.as_ref(), Some(&resolved));
@@ -160,6 +161,22 @@ mod tests {
         assert_eq!(cfl("merge2", ""), Some(1.0));
         let own = "\n[tracker]\nkind = \"front\"\n[tracker.front]\ncfl = 2.0\n";
         assert_eq!(cfl("enright", own), Some(2.0));
+    }
+
+    /// The front tracker's start is put on the exact initial interface where surface tension
+    /// reads its curvature, and left as remeshed elsewhere unless the scene asks.
+    #[test]
+    fn the_exact_start_defaults_on_with_surface_tension() {
+        let exact = |name: &str, extra: &str| {
+            let text = format!("{}{extra}", builtin_text(name));
+            let scene = Scene::parse(&text, name).unwrap();
+            let scene = scene.with_tracker(TrackerKind::Front).unwrap();
+            scene.file.tracker.front.unwrap().exact_start
+        };
+        assert_eq!(exact("droplet", ""), Some(true));
+        assert_eq!(exact("dambreak_column", ""), Some(false));
+        let own = "\n[tracker]\nkind = \"front\"\n[tracker.front]\nexact_start = true\n";
+        assert_eq!(exact("enright", own), Some(true));
     }
 
     #[test]

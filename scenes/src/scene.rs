@@ -122,6 +122,7 @@ impl Scene {
             front
                 .cfl
                 .get_or_insert(if passive { PASSIVE_CFL } else { 1.0 });
+            front.exact_start.get_or_insert(!file.tension.is_empty());
         }
         let base = SceneBase::from_origin(origin);
         let mut shapes = file

@@ -12,6 +12,7 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 use self::detach::detach_box;
+use self::onto_initial::onto_initial;
 pub use self::snapshot::FrontState;
 use self::topology_step::T1Rule;
 pub use self::topology_step::TopologyCounts;
@@ -30,6 +31,15 @@ use crate::mesh::LabeledMesh;
 use crate::query::MeshQuery;
 use crate::snapshot::TrackerSnapshot;
 use crate::tracker::{InterfaceTracker, StepStats, TrackerError};
+
+/// With [`FrontParams::exact_start`], the start's remeshing collapses edges up to this factor
+/// longer than the steps' bound. A contouring at half the spacing leaves many edges exactly at
+/// the bound, L/2 (grid edges on the walls, crossings half a cell apart); the first steps'
+/// rounding-level motion then tipped hundreds of them under it (645 in `laplace2_front`'s
+/// first step at 16 cells across), and their midpoint collapses next to the interface kicked a
+/// static drop into grid-scale capillary waves (at 32 cells across, 2.0e-5 m/s with the start
+/// on the exact circle but those collapses left to the steps, 4.1e-6 without them).
+const START_COLLAPSE_MARGIN: f64 = 1.05;
 
 /// Why a front tracker could not be built.
 #[derive(Debug, Error, PartialEq)]
@@ -158,11 +168,17 @@ impl FrontTracker {
             gives_back: false,
         };
         // A contoured mesh is far from the target sizing: remesh until the bulk of the work is
-        // done, so that the first steps do not carry it (at most 4 passes).
+        // done, so that the first steps do not carry it (at most 4 passes), collapsing edges a
+        // little past the steps' bound (`START_COLLAPSE_MARGIN`).
+        let mut start_params = tracker.params.clone();
+        let wider = start_params.min_edge * START_COLLAPSE_MARGIN;
+        if tracker.exact_start() && 2.0 * wider < start_params.max_edge {
+            start_params.min_edge = wider;
+        }
         for _ in 0..4 {
             // Plain positions: the start may be handed to a mesh-driven flow (with volume-keeping
             // collapses here the 64-cell `foam` test ran past 12 minutes in release, not 22 s).
-            let stats = improve(&mut tracker.c, &tracker.params, tracker.target, false);
+            let stats = improve(&mut tracker.c, &start_params, tracker.target, false);
             tracker.report.remesh = stats;
             if stats.splits + stats.collapses < tracker.c.mesh.triangles.len() / 1000 {
                 break;
@@ -195,7 +211,22 @@ impl FrontTracker {
         untangle(&mut mesh).map_err(FrontError::Intersecting)?;
         let mut tracker = FrontTracker::new(mesh, n_phases, background, params)?;
         tracker.detached_volume = box_volume;
+        // Coarsening left its vertices a sagitta off the exact interface: put them back on it,
+        // unless that would make two triangles intersect (then the start stays as remeshed).
+        if tracker.exact_start() {
+            let fixed = tracker.fixed_coordinates(true);
+            let placed = onto_initial(&tracker.c, initial, tracker.target, &fixed);
+            let remeshed = std::mem::replace(&mut tracker.c.mesh.vertices, placed);
+            if !self_intersections(&tracker.c.mesh).is_empty() {
+                tracker.c.mesh.vertices = remeshed;
+            }
+        }
         Ok(tracker)
+    }
+
+    /// Whether the start is put on the initial interface ([`FrontParams::exact_start`]).
+    fn exact_start(&self) -> bool {
+        self.params.exact_start.unwrap_or(false)
     }
 
     /// Target edge length in domain units.
@@ -548,6 +579,7 @@ impl InterfaceTracker for FrontTracker {
 mod detach;
 mod flux;
 mod give_back;
+mod onto_initial;
 mod snapshot;
 mod topology_step;
 mod untangle;
