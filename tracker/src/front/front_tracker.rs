@@ -524,6 +524,9 @@ impl InterfaceTracker for FrontTracker {
             ],
             events: vec![
                 ("flow_substeps", self.report.flow_substeps),
+                ("remesh_splits", self.report.remesh.splits),
+                ("remesh_collapses", self.report.remesh.collapses),
+                ("remesh_flips", self.report.remesh.flips),
                 ("merge_snaps", self.report.topology.snaps),
                 ("t1_collapses", self.report.topology.junction_collapses),
                 ("t1_separations", self.report.topology.separations),
