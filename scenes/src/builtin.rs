@@ -148,14 +148,18 @@ mod tests {
 
     /// Passive runs step 3 L by default (the paper's code's step), coupled runs and
     /// mesh-driven flows 1 L, and a scene's own value is kept.
+    /// The resolved front-tracker parameters of built-in `name` with `extra` appended, run
+    /// with the front tracker.
+    fn front_params(name: &str, extra: &str) -> FrontParams {
+        let text = format!("{}{extra}", builtin_text(name));
+        let scene = Scene::parse(&text, name).unwrap();
+        let scene = scene.with_tracker(TrackerKind::Front).unwrap();
+        scene.file.tracker.front.unwrap()
+    }
+
     #[test]
     fn the_front_step_bound_defaults_by_what_moves_the_mesh() {
-        let cfl = |name: &str, extra: &str| {
-            let text = format!("{}{extra}", builtin_text(name));
-            let scene = Scene::parse(&text, name).unwrap();
-            let scene = scene.with_tracker(TrackerKind::Front).unwrap();
-            scene.file.tracker.front.unwrap().cfl
-        };
+        let cfl = |name: &str, extra: &str| front_params(name, extra).cfl;
         assert_eq!(cfl("enright", ""), Some(PASSIVE_CFL));
         assert_eq!(cfl("dambreak_column", ""), Some(1.0));
         assert_eq!(cfl("merge2", ""), Some(1.0));
@@ -167,12 +171,7 @@ mod tests {
     /// reads its curvature, and left as remeshed elsewhere unless the scene asks.
     #[test]
     fn the_exact_start_defaults_on_with_surface_tension() {
-        let exact = |name: &str, extra: &str| {
-            let text = format!("{}{extra}", builtin_text(name));
-            let scene = Scene::parse(&text, name).unwrap();
-            let scene = scene.with_tracker(TrackerKind::Front).unwrap();
-            scene.file.tracker.front.unwrap().exact_start
-        };
+        let exact = |name: &str, extra: &str| front_params(name, extra).exact_start;
         assert_eq!(exact("droplet", ""), Some(true));
         assert_eq!(exact("dambreak_column", ""), Some(false));
         let own = "\n[tracker]\nkind = \"front\"\n[tracker.front]\nexact_start = true\n";
