@@ -78,10 +78,8 @@ pub struct FrontParams {
     /// vertices then move along their normals onto the interface (`front_tracker/
     /// onto_initial.rs`). Unset: on in scenes with surface tension, whose forces read the
     /// mesh's curvature (`laplace2_front`'s spurious currents 6.7e-5 → 4.1e-6 m/s), off
-    /// elsewhere: there the changed start left `mcf_t2`'s shrinking cell a remnant its T2
-    /// could not remove, and `dambreak_column`'s contact line 2.95 instead of 2.28 tracker
-    /// cells behind the contouring tracker's at 64 cells (`tests/t2.rs`,
-    /// `tests/front_coupled.rs`).
+    /// elsewhere: on everywhere, `enright` at 24³ came back 2.63 h off instead of 0.63 h, its
+    /// worst liquid −2.2 % from its first mesh instead of +0.42 % (`tests/front.rs` allows 2 h).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub exact_start: Option<bool>,
     /// Surfaces closer than `merge_distance * L` are snapped together (paper 000 §6.2, whose
