@@ -55,8 +55,7 @@ fn normal_line(c: &Connectivity, v: u32, fixed: [bool; 3]) -> Option<(DVec3, Pha
             continue;
         }
         let [into, from] = *pair.get_or_insert(labels);
-        let [a, b, d] = c.triangle(t).map(|u| c.position(u));
-        let n = (b - a).cross(d - a);
+        let n = c.mesh.area_normal(t as usize);
         if labels == [into, from] {
             normals.push(n);
         } else if labels == [from, into] {
