@@ -48,7 +48,7 @@ pub(crate) fn edge_crossing(
 }
 
 /// [`edge_crossing`], also returning the phase found on the far side of the crossing.
-fn crossing(
+pub(crate) fn crossing(
     sampler: &dyn PhaseSampler,
     a: DVec3,
     b: DVec3,

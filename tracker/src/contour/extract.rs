@@ -12,10 +12,12 @@ use polyphase_grid::PhaseId;
 use rayon::iter::Either;
 use rayon::prelude::*;
 
-use super::bisect::{clamp_to_triangle, edge_crossing, junction, triple_point};
+use super::bisect::{edge_crossing, junction, triple_point};
 use super::sampler::PhaseSampler;
 use super::stencils::{corner_offset, Poly, Simplex, VKey, KUHN};
 use super::tree::MdTree;
+use super::triple_choice::settle;
+use super::untangle::take_back_tangles;
 use crate::mesh::LabeledMesh;
 
 /// The polygons' distinct vertex keys, sorted: lattice nodes (the closure's, most of a
@@ -74,6 +76,9 @@ impl MdTree {
         // (`enright` 64³: 12 of 376 triple-line edges at the start, a third of one liquid
         // detached by t = T). Kept inside, none folds (`triple_lines_do_not_fold`); the cost is
         // at most 7 more wrong points per million in the first step's indicator (Table 2).
+        // Where a crossing has collapsed onto a node (an interface through a lattice node),
+        // `triple_choice` may place the point elsewhere in the face, and `untangle` takes it
+        // back wherever that tangles the mesh.
         let mut vertices: Vec<DVec3> = keys
             .par_iter()
             .map(|&k| match k {
@@ -89,7 +94,7 @@ impl MdTree {
                 .map(|i| node_keys.len() + i),
         };
         let crossing = |a: u64, b: u64| index(&VKey::Edge(a, b)).map(|i| vertices[i]);
-        let triple_points: Vec<(usize, DVec3)> = keys
+        let triple_points: Vec<(usize, DVec3, Option<DVec3>)> = keys
             .par_iter()
             .enumerate()
             .filter_map(|(i, &k)| {
@@ -100,13 +105,23 @@ impl MdTree {
                 // A face with three phases has a crossing on each edge; should one be missing,
                 // the triple point stays where the search put it.
                 Some(match (crossing(b, c), crossing(a, c), crossing(a, b)) {
-                    (Some(p), Some(q), Some(r)) => (i, clamp_to_triangle(x, [p, q, r])),
-                    _ => (i, x),
+                    (Some(p), Some(q), Some(r)) => {
+                        let corners = [a, b, c].map(|n| self.lattice.pos(n));
+                        let phases = [a, b, c].map(|n| self.nodes.value(n).unwrap_or((0.0, 0)).1);
+                        let (t, inside) =
+                            settle(sampler, corners, phases, [p, q, r], x, self.lattice.h);
+                        (i, t, inside)
+                    }
+                    _ => (i, x, None),
                 })
             })
             .collect();
-        for (i, x) in triple_points {
+        let mut moved: Vec<(u32, DVec3)> = Vec::new();
+        for (i, x, inside) in triple_points {
             vertices[i] = x;
+            if let Some(inside) = inside {
+                moved.push((i as u32, inside));
+            }
         }
         let id = |k: &VKey| index(k).map_or(0, |i| i as u32);
         let tris: Vec<([u32; 3], [PhaseId; 2])> = polys
@@ -132,11 +147,13 @@ impl MdTree {
             })
             .collect();
         let (triangles, labels) = tris.into_iter().unzip();
-        LabeledMesh {
+        let mut mesh = LabeledMesh {
             vertices,
             triangles,
             labels,
-        }
+        };
+        take_back_tangles(&mut mesh, &moved);
+        mesh
     }
 
     /// Stencil polygons of interface cell `c`: its 6 tets, and its tet faces on the boundary.

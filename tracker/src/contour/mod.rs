@@ -25,6 +25,9 @@
 //!   fallback, and gives the quadruple points), then kept inside the triangle of their face's
 //!   edge crossings (`extract`), so the sheets around a triple line keep the order their
 //!   labels assume (no fold; tested).
+//! - `triple_choice`, `untangle`: where a crossing collapses onto a node (an interface through
+//!   lattice nodes), the triple point is chosen by sampling the face, and taken back where it
+//!   tangles the mesh.
 //! - `closure`: the domain boundary, conforming to hanging nodes of coarse leaves.
 //! - `extract`: keys sorted before positions are computed, so the output is identical for any
 //!   thread count.
@@ -38,6 +41,8 @@ mod persist;
 mod sampler;
 mod stencils;
 pub(crate) mod tree;
+mod triple_choice;
+mod untangle;
 
 #[cfg(test)]
 mod tests;

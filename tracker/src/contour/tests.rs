@@ -869,3 +869,67 @@ fn every_corner_is_sampled_once_and_slotted() {
         }
     }
 }
+
+#[test]
+fn triple_points_stay_on_a_sphere_cut_along_a_lattice_plane() {
+    // `zalesak`'s liquids meet on z = 0.5, a plane of lattice nodes: the lower liquid's
+    // crossings collapse onto those nodes, and the line search alone left triple points up to
+    // 1.1 h inside the sphere (measured), the sheets from them denting both liquids.
+    use super::stencils::KUHN;
+    let c = DVec3::new(0.5, 0.75, 0.5);
+    let r0 = 0.15;
+    let f = move |x: DVec3| {
+        let r = (x - c).length();
+        if r > r0 {
+            (r - r0, 0 as PhaseId)
+        } else {
+            (
+                (r0 - r).min((x.z - c.z).abs()),
+                if x.z <= c.z { 1 } else { 2 },
+            )
+        }
+    };
+    let h = 1.0 / 128.0;
+    let mut worst = 0.0_f64;
+    let mut faces = 0;
+    for i in 40..90 {
+        for j in 70..130 {
+            for k in 62..66 {
+                let o = DVec3::new(i as f64, j as f64, k as f64) * h;
+                for tet in KUHN {
+                    for skip in 0..4 {
+                        let mut corners = tet.iter().enumerate().filter(|&(q, _)| q != skip);
+                        let tri: [DVec3; 3] = std::array::from_fn(|_| {
+                            o + super::stencils::corner_offset(*corners.next().unwrap().1) * h
+                        });
+                        let vals = tri.map(f);
+                        if vals[0].1 == vals[1].1
+                            || vals[1].1 == vals[2].1
+                            || vals[0].1 == vals[2].1
+                        {
+                            continue;
+                        }
+                        let crossings = [(1, 2), (0, 2), (0, 1)].map(|(a, b)| {
+                            super::bisect::edge_crossing(&f, tri[a], tri[b], vals[a], vals[b], h)
+                        });
+                        let found = super::bisect::triple_point(&f, tri, vals, h);
+                        let (x, _) = super::triple_choice::settle(
+                            &f,
+                            tri,
+                            vals.map(|v| v.1),
+                            crossings,
+                            found,
+                            h,
+                        );
+                        worst = worst.max(((x - c).length() - r0).abs() / h);
+                        faces += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(faces > 500, "faces with three phases: {faces}");
+    // Measured 0.25 h (a point of a cell-sized face that is not on the curve, since no face
+    // holds it when the lower liquid is one node plane thin); a dent as before is ≥ 1 h.
+    assert!(worst < 0.35, "worst triple point {worst} h off the sphere");
+}
