@@ -12,11 +12,11 @@ use polyphase_grid::PhaseId;
 use rayon::iter::Either;
 use rayon::prelude::*;
 
-use super::bisect::{edge_crossing, junction, triple_point};
+use super::bisect::{clamp_to_triangle, edge_crossing, junction, triple_point};
 use super::sampler::PhaseSampler;
 use super::stencils::{corner_offset, Poly, Simplex, VKey, KUHN};
 use super::tree::MdTree;
-use super::triple_choice::settle;
+use super::triple_choice::{settle, TriplePoints};
 use super::untangle::take_back_tangles;
 use crate::mesh::LabeledMesh;
 
@@ -55,6 +55,12 @@ impl MdTree {
     /// Multiphase marching tetrahedra with bisection on exact φ, χ, watertight, closed at the
     /// domain boundary (boundary faces are labelled `[OUTSIDE, phase]` and face outward).
     pub fn contour(&self, sampler: &dyn PhaseSampler) -> LabeledMesh {
+        self.contour_with(sampler, TriplePoints::Sampled)
+    }
+
+    /// [`MdTree::contour`], with the triple points of faces whose crossing collapsed onto a
+    /// node placed as `triples` says.
+    pub fn contour_with(&self, sampler: &dyn PhaseSampler, triples: TriplePoints) -> LabeledMesh {
         let mut polys: Vec<Poly> = self
             .interface
             .par_iter()
@@ -105,6 +111,9 @@ impl MdTree {
                 // A face with three phases has a crossing on each edge; should one be missing,
                 // the triple point stays where the search put it.
                 Some(match (crossing(b, c), crossing(a, c), crossing(a, b)) {
+                    (Some(p), Some(q), Some(r)) if triples == TriplePoints::Searched => {
+                        (i, clamp_to_triangle(x, [p, q, r]), None)
+                    }
                     (Some(p), Some(q), Some(r)) => {
                         let corners = [a, b, c].map(|n| self.lattice.pos(n));
                         let phases = [a, b, c].map(|n| self.nodes.value(n).unwrap_or((0.0, 0)).1);

@@ -50,3 +50,4 @@ mod tests;
 pub use persist::TreeDecodeError;
 pub use sampler::PhaseSampler;
 pub use tree::MdTree;
+pub use triple_choice::TriplePoints;

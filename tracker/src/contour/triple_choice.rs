@@ -47,6 +47,20 @@ const COLLAPSED: f64 = 2.0 * MARGIN;
 /// The corners at the ends of the face's edges as [`Lattice::boundary_crossings`] numbers them.
 const EDGE_CORNERS: [[usize; 2]; 3] = [[0, 1], [1, 2], [0, 2]];
 
+/// Where the triple points of faces whose crossing collapsed onto a node go.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TriplePoints {
+    /// Chosen by sampling the face ([`settle`]): the phases' volumes right, the triple curve
+    /// up to a cell off the lattice plane it lies on. The contouring tracker's choice.
+    Sampled,
+    /// The line search's point kept inside the crossings' triangle: the triple curve stays on
+    /// the plane, the liquids dented up to a cell beside it. The front tracker's start, whose
+    /// triple curves flows and tension act on: from sampled points `double_bubble` at 16³
+    /// ended 4.1° off Plateau's angle (`tests/plateau.rs`) and `cyclic` split a region
+    /// (`tests/topology.rs`).
+    Searched,
+}
+
 /// The face's triple point: `found` (from [`super::bisect::triple_point`]) kept inside the
 /// triangle of the `crossings` (`crossings[k]` on the edge opposite corner k) when it lies
 /// there and no crossing has collapsed onto a node; otherwise the best candidate by sampling

@@ -24,8 +24,7 @@ use super::params::{FrontParams, Integrator};
 use super::remesh::{improve, RemeshStats};
 use super::response::{resolve_pinned, CollisionParams};
 use super::topology::regions::regions;
-use crate::contour::PhaseSampler;
-use crate::contour_tracker::ContourTracker;
+use crate::contour::{MdTree, PhaseSampler, TriplePoints};
 use crate::invariants::{check, InvariantError};
 use crate::mesh::LabeledMesh;
 use crate::query::MeshQuery;
@@ -205,9 +204,9 @@ impl FrontTracker {
             h: 0.5 * grid.h,
             dims: grid.dims.map(|d| 2 * d),
         };
-        let (contour, _) = ContourTracker::new(fine, initial, n_phases, background);
+        let contour = MdTree::build(&fine, initial).contour_with(initial, TriplePoints::Searched);
         params.edge_length = Some(params.edge_length.unwrap_or(grid.h));
-        let (mut mesh, box_volume) = detach_box(contour.mesh().clone(), background);
+        let (mut mesh, box_volume) = detach_box(contour, background);
         untangle(&mut mesh).map_err(FrontError::Intersecting)?;
         let mut tracker = FrontTracker::new(mesh, n_phases, background, params)?;
         tracker.detached_volume = box_volume;
