@@ -146,8 +146,6 @@ mod tests {
         );
     }
 
-    /// Passive runs step 3 L by default (the paper's code's step), coupled runs and
-    /// mesh-driven flows 1 L, and a scene's own value is kept.
     /// The resolved front-tracker parameters of built-in `name` with `extra` appended, run
     /// with the front tracker.
     fn front_params(name: &str, extra: &str) -> FrontParams {
@@ -157,6 +155,8 @@ mod tests {
         scene.file.tracker.front.unwrap()
     }
 
+    /// Passive runs step 3 L by default (the paper's code's step), coupled runs and
+    /// mesh-driven flows 1 L, and a scene's own value is kept.
     #[test]
     fn the_front_step_bound_defaults_by_what_moves_the_mesh() {
         let cfl = |name: &str, extra: &str| front_params(name, extra).cfl;

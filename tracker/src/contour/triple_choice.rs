@@ -62,9 +62,8 @@ pub enum TriplePoints {
 }
 
 /// The face's triple point: `found` (from [`super::bisect::triple_point`]) kept inside the
-/// triangle of the `crossings` (`crossings[k]` on the edge opposite corner k) when it lies
-/// there and no crossing has collapsed onto a node; otherwise the best candidate by sampling
-/// (module docs). Also returns the point inside the crossings' triangle when the choice lies
+/// triangle of the `crossings` (`crossings[k]` on the edge opposite corner k) when no crossing
+/// has collapsed onto a node; otherwise the best candidate by sampling (module docs). Also returns the point inside the crossings' triangle when the choice lies
 /// outside it, for [`super::untangle`] to take back.
 pub(crate) fn settle(
     sampler: &dyn PhaseSampler,

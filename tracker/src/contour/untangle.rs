@@ -14,13 +14,13 @@ use crate::front::intersection::pair_intersects;
 use crate::LabeledMesh;
 
 /// Moves vertex `v` of each `(v, inside)` in `moved` back to `inside` where a triangle at it
-/// intersects another; returns how many were taken back.
+/// intersects another.
 ///
 /// The pairs worth testing are found once, from boxes swept between the chosen and the
 /// inside positions, so they hold whichever points are taken back; the rounds test only them.
-pub(crate) fn take_back_tangles(mesh: &mut LabeledMesh, moved: &[(u32, DVec3)]) -> usize {
+pub(crate) fn take_back_tangles(mesh: &mut LabeledMesh, moved: &[(u32, DVec3)]) {
     if moved.is_empty() {
-        return 0;
+        return;
     }
     let mut ids: Vec<u32> = moved.iter().map(|m| m.0).collect();
     ids.sort_unstable();
@@ -30,7 +30,6 @@ pub(crate) fn take_back_tangles(mesh: &mut LabeledMesh, moved: &[(u32, DVec3)]) 
     }
     let pairs = candidate_pairs(mesh, &back, &ids);
     let mut live = ids;
-    let mut taken = 0;
     loop {
         let mut tangled: Vec<u32> = pairs
             .par_iter()
@@ -41,12 +40,11 @@ pub(crate) fn take_back_tangles(mesh: &mut LabeledMesh, moved: &[(u32, DVec3)]) 
         tangled.sort_unstable();
         tangled.dedup();
         if tangled.is_empty() {
-            return taken;
+            return;
         }
         for &v in &tangled {
             mesh.vertices[v as usize] = back[v as usize];
         }
-        taken += tangled.len();
         live.retain(|v| tangled.binary_search(v).is_err());
     }
 }
