@@ -27,6 +27,14 @@ pub struct FoamBench {
     pub frames: Option<i64>,
 }
 
+/// Stages timed per row (summed over the row's steps), in table order, with their column
+/// titles; "remesh" includes the implicit flow's solves, which run between the stages.
+const STAGES: [(&str, &str); 3] = [
+    ("collide", "collide s"),
+    ("remesh", "remesh s"),
+    ("topology", "T1/T2 s"),
+];
+
 /// Events counted per row, in table order, with their column titles.
 const EVENTS: [(&str, &str); 4] = [
     ("t1_separations", "T1 sep"),
@@ -60,11 +68,16 @@ pub fn run(opts: &FoamBench) -> Result<()> {
     for (_, title) in EVENTS {
         let _ = write!(out, "{title:>10}");
     }
-    let _ = writeln!(out, "{:>12}{:>10}", "s/substep", "wall s");
+    let _ = write!(out, "{:>12}", "s/substep");
+    for (_, title) in STAGES {
+        let _ = write!(out, "{title:>11}");
+    }
+    let _ = writeln!(out, "{:>10}", "wall s");
     eprint!("{out}");
     let mut step = 0;
     for frame in 1..=scene.file.time.frames as usize {
         let mut counts = [0usize; EVENTS.len()];
+        let mut seconds_in = [0.0; STAGES.len()];
         let frame_start = Instant::now();
         for _ in 0..per_frame {
             let stats = tracker
@@ -74,6 +87,11 @@ pub fn run(opts: &FoamBench) -> Result<()> {
             for (name, n) in &stats.events {
                 if let Some(k) = EVENTS.iter().position(|(e, _)| e == name) {
                     counts[k] += n;
+                }
+            }
+            for (name, s) in &stats.stages {
+                if let Some(k) = STAGES.iter().position(|(e, _)| e == name) {
+                    seconds_in[k] += s;
                 }
             }
         }
@@ -88,12 +106,11 @@ pub fn run(opts: &FoamBench) -> Result<()> {
             let _ = write!(row, "{c:>10}");
         }
         let substeps = counts[EVENTS.len() - 1].max(1);
-        let _ = writeln!(
-            row,
-            "{:>12.3}{:>10.1}",
-            seconds / substeps as f64,
-            started.elapsed().as_secs_f64()
-        );
+        let _ = write!(row, "{:>12.3}", seconds / substeps as f64);
+        for s in seconds_in {
+            let _ = write!(row, "{s:>11.1}");
+        }
+        let _ = writeln!(row, "{:>10.1}", started.elapsed().as_secs_f64());
         eprint!("{row}");
         out.push_str(&row);
     }

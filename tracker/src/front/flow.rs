@@ -65,7 +65,8 @@ pub enum FlowStep<'a> {
 impl MeshFlow {
     /// The motion of substep number `step`, from time `t` for `h`, of the mesh in `c`;
     /// `fixed[v][k]` marks coordinates held by a domain wall (the implicit flow needs them in
-    /// its solve).
+    /// its solve), and `earlier` the velocities of an earlier try of the same substep with
+    /// another `h`, where the implicit flow's solve starts.
     pub fn step(
         &self,
         c: &Connectivity,
@@ -73,6 +74,7 @@ impl MeshFlow {
         t: f64,
         h: f64,
         fixed: &[[bool; 3]],
+        earlier: Option<&[DVec3]>,
     ) -> FlowStep<'_> {
         match self {
             MeshFlow::Normal { speeds, reverse_at } => {
@@ -82,7 +84,7 @@ impl MeshFlow {
                 FlowStep::Vertices(offset::velocities(c, speeds, sign(*reverse_at, t)))
             }
             MeshFlow::MeanCurvature { rate } => {
-                FlowStep::Vertices(curvature::implicit_velocities(c, *rate, h, fixed))
+                FlowStep::Vertices(curvature::implicit_velocities(c, *rate, h, fixed, earlier))
             }
             MeshFlow::NoiseAndNormal { noise, speeds } => {
                 if step.is_multiple_of(2) {
@@ -107,6 +109,12 @@ impl MeshFlow {
             } if !reached(*at, t) => Some(*at),
             _ => None,
         }
+    }
+
+    /// Whether a substep's velocities depend on its length (the backward-Euler mean-curvature
+    /// flow), so that the substep fitting the travel limit is found by tries.
+    pub fn is_implicit(&self) -> bool {
+        matches!(self, MeshFlow::MeanCurvature { .. })
     }
 
     /// The fraction of the travel limit a substep may use. Backward Euler is stable at any

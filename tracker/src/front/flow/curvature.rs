@@ -44,145 +44,189 @@ pub(super) fn velocities(c: &Connectivity, rate: f64) -> Vec<DVec3> {
 
 /// Velocities of one backward-Euler step of length `h`: the positions x solve
 /// (M + h·rate·K) x = M x₀, with M the barycentric vertex areas and K the cotangent stiffness
-/// (whose action on x is the area gradient), each coordinate on its own; coordinates
-/// `fixed[v][k]` (a wall the vertex slides on) and vertices on no interface keep their value.
-/// Returned as (x − x₀)/h.
+/// (whose action on x is the area gradient), each coordinate on its own (the three in
+/// parallel); coordinates `fixed[v][k]` (a wall the vertex slides on) and vertices on no
+/// interface keep their value. Returned as (x − x₀)/h. The solve starts from x₀ + h·`earlier`
+/// when an earlier try's velocities are given (the displacement is nearly proportional to
+/// the step), else from x₀.
 pub(super) fn implicit_velocities(
     c: &Connectivity,
     rate: f64,
     h: f64,
     fixed: &[[bool; 3]],
+    earlier: Option<&[DVec3]>,
 ) -> Vec<DVec3> {
-    let n = c.mesh.vertices.len();
-    let (mass, stiffness) = assemble(c);
-    let diagonal: Vec<f64> = (0..n)
-        .map(|i| mass[i] + h * rate * stiffness[i].iter().map(|&(_, w)| w).sum::<f64>())
-        .collect();
-    let apply = |x: &[f64], free: &[bool]| -> Vec<f64> {
-        (0..n)
-            .into_par_iter()
-            .map(|i| {
-                if !free[i] {
-                    return 0.0;
-                }
-                let k: f64 = stiffness[i]
-                    .iter()
-                    .map(|&(j, w)| w * (x[i] - x[j as usize]))
-                    .sum();
-                mass[i] * x[i] + h * rate * k
-            })
-            .collect()
-    };
+    let system = System::assemble(c, h * rate);
     let x0 = &c.mesh.vertices;
-    let mut velocities = vec![DVec3::ZERO; n];
-    for k in 0..3 {
-        let free: Vec<bool> = (0..n)
-            .map(|i| mass[i] > 0.0 && diagonal[i] > 0.0 && !fixed.get(i).is_some_and(|f| f[k]))
+    let solve = |k: usize| {
+        let free: Vec<bool> = (0..x0.len())
+            .map(|i| {
+                system.mass[i] > 0.0
+                    && system.diagonal[i] > 0.0
+                    && !fixed.get(i).is_some_and(|f| f[k])
+            })
             .collect();
         let start: Vec<f64> = x0.iter().map(|p| p[k]).collect();
-        let x = conjugate_gradient(&start, &mass, &diagonal, &free, &apply);
-        for (v, (a, b)) in velocities.iter_mut().zip(x.iter().zip(&start)) {
-            v[k] = (a - b) / h;
-        }
-    }
-    velocities
+        let guess: Vec<f64> = match earlier {
+            Some(v) => (0..x0.len())
+                .map(|i| start[i] + if free[i] { h * v[i][k] } else { 0.0 })
+                .collect(),
+            None => start.clone(),
+        };
+        let x = system.solve(&start, &guess, &free);
+        x.iter().zip(&start).map(|(a, b)| (a - b) / h).collect()
+    };
+    let (dx, (dy, dz)): (Vec<f64>, (Vec<f64>, Vec<f64>)) =
+        rayon::join(|| solve(0), || rayon::join(|| solve(1), || solve(2)));
+    (0..x0.len())
+        .map(|v| DVec3::new(dx[v], dy[v], dz[v]))
+        .collect()
 }
-
-/// y = A x on the free entries (zero elsewhere).
-type Operator<'a> = dyn Fn(&[f64], &[bool]) -> Vec<f64> + 'a;
 
 /// Relative residual at which the implicit solve stops; far below the remeshing's own
 /// perturbations of the positions.
 const TOLERANCE: f64 = 1e-10;
 
-/// Solves A x = M x₀ on the `free` entries from x = x₀ (the others stay), by conjugate
-/// gradients with the diagonal as preconditioner. Dot products are summed in index order, so
-/// the result does not depend on the thread count.
-fn conjugate_gradient(
-    start: &[f64],
-    mass: &[f64],
-    diagonal: &[f64],
-    free: &[bool],
-    apply: &Operator,
-) -> Vec<f64> {
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    let mut x = start.to_vec();
-    let ax = apply(&x, free);
-    let b: Vec<f64> = (0..x.len())
-        .map(|i| if free[i] { mass[i] * start[i] } else { 0.0 })
-        .collect();
-    let mut r: Vec<f64> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
-    let norm_b = dot(&b, &b).sqrt();
-    let precondition = |r: &[f64]| -> Vec<f64> {
-        r.iter()
-            .zip(diagonal)
-            .zip(free)
-            .map(|((r, d), &f)| if f { r / d } else { 0.0 })
-            .collect()
-    };
-    let mut z = precondition(&r);
-    let mut p = z.clone();
-    let mut rz = dot(&r, &z);
-    for _ in 0..x.len().clamp(50, 1000) {
-        if dot(&r, &r).sqrt() <= TOLERANCE * norm_b {
-            break;
-        }
-        let q = apply(&p, free);
-        let pq = dot(&p, &q);
-        if pq <= 0.0 {
-            break;
-        }
-        let alpha = rz / pq;
-        for i in 0..x.len() {
-            x[i] += alpha * p[i];
-            r[i] -= alpha * q[i];
-        }
-        z = precondition(&r);
-        let rz_new = dot(&r, &z);
-        let beta = rz_new / rz;
-        rz = rz_new;
-        for i in 0..x.len() {
-            p[i] = z[i] + beta * p[i];
-        }
-    }
-    x
+/// The matrix M + s·K of a backward-Euler step (s = step × rate), in compressed rows:
+/// barycentric vertex areas, and per vertex the cotangent weights ½(cot α + cot β) to its
+/// neighbours, summed over every interface triangle on the edge (non-manifold edges too).
+struct System {
+    mass: Vec<f64>,
+    /// M + s·(row sum of K's weights): the diagonal, also the preconditioner.
+    diagonal: Vec<f64>,
+    /// Row `i`'s entries are `columns[rows[i]..rows[i + 1]]`, `weights[..]` the same.
+    rows: Vec<usize>,
+    columns: Vec<u32>,
+    weights: Vec<f64>,
+    /// s·K's scale.
+    s: f64,
 }
 
-/// Barycentric vertex areas and, per vertex, the cotangent weights ½(cot α + cot β) to its
-/// neighbours, summed over every interface triangle on the edge (non-manifold edges too).
-fn assemble(c: &Connectivity) -> (Vec<f64>, Vec<Vec<(u32, f64)>>) {
-    let n = c.mesh.vertices.len();
-    let mut mass = vec![0.0; n];
-    let mut stiffness: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
-    for (t, (&tri, labels)) in c.mesh.triangles.iter().zip(&c.mesh.labels).enumerate() {
-        if !c.is_live(t as u32) || labels.contains(&OUTSIDE) {
-            continue;
-        }
-        let p = tri.map(|v| c.position(v));
-        let twice = (p[1] - p[0]).cross(p[2] - p[0]).length();
-        if twice <= 0.0 {
-            continue;
-        }
-        for k in 0..3 {
-            mass[tri[k] as usize] += twice / 6.0;
-            let (i, j) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
-            let cot = (p[(k + 1) % 3] - p[k]).dot(p[(k + 2) % 3] - p[k]) / twice;
-            stiffness[i as usize].push((j, 0.5 * cot));
-            stiffness[j as usize].push((i, 0.5 * cot));
-        }
-    }
-    for list in &mut stiffness {
-        list.sort_by_key(|&(j, _)| j);
-        list.dedup_by(|b, a| {
-            if a.0 == b.0 {
-                a.1 += b.1;
-                true
-            } else {
-                false
+impl System {
+    fn assemble(c: &Connectivity, s: f64) -> System {
+        let n = c.mesh.vertices.len();
+        let mut mass = vec![0.0; n];
+        let mut stiffness: Vec<Vec<(u32, f64)>> = vec![Vec::new(); n];
+        for (t, (&tri, labels)) in c.mesh.triangles.iter().zip(&c.mesh.labels).enumerate() {
+            if !c.is_live(t as u32) || labels.contains(&OUTSIDE) {
+                continue;
             }
-        });
+            let p = tri.map(|v| c.position(v));
+            let twice = (p[1] - p[0]).cross(p[2] - p[0]).length();
+            if twice <= 0.0 {
+                continue;
+            }
+            for k in 0..3 {
+                mass[tri[k] as usize] += twice / 6.0;
+                let (i, j) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
+                let cot = (p[(k + 1) % 3] - p[k]).dot(p[(k + 2) % 3] - p[k]) / twice;
+                stiffness[i as usize].push((j, 0.5 * cot));
+                stiffness[j as usize].push((i, 0.5 * cot));
+            }
+        }
+        let mut rows = Vec::with_capacity(n + 1);
+        rows.push(0);
+        let (mut columns, mut weights) = (Vec::new(), Vec::new());
+        let mut diagonal = Vec::with_capacity(n);
+        for (i, list) in stiffness.iter_mut().enumerate() {
+            list.sort_by_key(|&(j, _)| j);
+            list.dedup_by(|b, a| {
+                if a.0 == b.0 {
+                    a.1 += b.1;
+                    true
+                } else {
+                    false
+                }
+            });
+            diagonal.push(mass[i] + s * list.iter().map(|&(_, w)| w).sum::<f64>());
+            columns.extend(list.iter().map(|&(j, _)| j));
+            weights.extend(list.iter().map(|&(_, w)| w));
+            rows.push(columns.len());
+        }
+        System {
+            mass,
+            diagonal,
+            rows,
+            columns,
+            weights,
+            s,
+        }
     }
-    (mass, stiffness)
+
+    /// y = (M + s·K) x on the free entries, zero elsewhere.
+    fn apply(&self, x: &[f64], free: &[bool], y: &mut [f64]) {
+        for (i, yi) in y.iter_mut().enumerate() {
+            *yi = if free[i] {
+                let row = self.rows[i]..self.rows[i + 1];
+                let k: f64 = self.columns[row.clone()]
+                    .iter()
+                    .zip(&self.weights[row])
+                    .map(|(&j, w)| w * (x[i] - x[j as usize]))
+                    .sum();
+                self.mass[i] * x[i] + self.s * k
+            } else {
+                0.0
+            };
+        }
+    }
+
+    /// Solves (M + s·K) x = M x₀ on the `free` entries from x = `guess` (the others stay at
+    /// x₀), by conjugate gradients with the diagonal as preconditioner, sequentially (the
+    /// three coordinates run in parallel), so the result does not depend on the thread count.
+    fn solve(&self, start: &[f64], guess: &[f64], free: &[bool]) -> Vec<f64> {
+        let n = start.len();
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let mut x = guess.to_vec();
+        let mut q = vec![0.0; n];
+        self.apply(&x, free, &mut q);
+        let b: Vec<f64> = (0..n)
+            .map(|i| {
+                if free[i] {
+                    self.mass[i] * start[i]
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mut r: Vec<f64> = b.iter().zip(&q).map(|(b, a)| b - a).collect();
+        let norm_b = dot(&b, &b).sqrt();
+        let precondition = |r: &[f64], z: &mut [f64]| {
+            for i in 0..n {
+                z[i] = if free[i] {
+                    r[i] / self.diagonal[i]
+                } else {
+                    0.0
+                };
+            }
+        };
+        let mut z = vec![0.0; n];
+        precondition(&r, &mut z);
+        let mut p = z.clone();
+        let mut rz = dot(&r, &z);
+        for _ in 0..n.clamp(50, 1000) {
+            if dot(&r, &r).sqrt() <= TOLERANCE * norm_b {
+                break;
+            }
+            self.apply(&p, free, &mut q);
+            let pq = dot(&p, &q);
+            if pq <= 0.0 {
+                break;
+            }
+            let alpha = rz / pq;
+            for i in 0..n {
+                x[i] += alpha * p[i];
+                r[i] -= alpha * q[i];
+            }
+            precondition(&r, &mut z);
+            let rz_new = dot(&r, &z);
+            let beta = rz_new / rz;
+            rz = rz_new;
+            for i in 0..n {
+                p[i] = z[i] + beta * p[i];
+            }
+        }
+        x
+    }
 }
 
 /// Gradient of the area of triangle (x, p, q) with respect to x, and the area: the

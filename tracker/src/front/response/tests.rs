@@ -178,3 +178,48 @@ fn pinned_coordinates_take_no_share_of_an_impulse() {
     resolve(&m.triangles, &x0, &mut free, &CollisionParams::default()).expect("resolved");
     assert!((0..free.len()).any(|v| pinned[v][0] && free[v].x != proposed[v].x));
 }
+
+#[test]
+fn impact_zones_slide_along_pinned_coordinates_only_when_asked() {
+    // Impact zones alone (no impulse sweeps): each zone moves by its members' mean motion. The
+    // left sphere is driven into the right one, whose x is held where it is (as the tracker
+    // holds a vertex on a wall); a zone spanning both then moves the held x, unless zones
+    // slide.
+    let m = two_spheres(0.02, 2);
+    let x0 = m.vertices.clone();
+    let pinned: Vec<[bool; 3]> = x0.iter().map(|p| [p.x > 0.0, false, false]).collect();
+    let mut proposed = driven(&m, 0.1, 0.0, 1);
+    for (p, (q, pin)) in proposed.iter_mut().zip(x0.iter().zip(&pinned)) {
+        if pin[0] {
+            p.x = q.x;
+        }
+    }
+    let zones_only = CollisionParams {
+        impulse_iterations: 0,
+        ..CollisionParams::default()
+    };
+    let mut x1 = proposed.clone();
+    let failed = resolve_pinned(&m.triangles, &x0, &mut x1, &pinned, &zones_only);
+    assert!(
+        matches!(
+            failed,
+            Err(Unresolved {
+                cause: UnresolvedCause::PinnedMoved { .. }
+            })
+        ),
+        "{failed:?}"
+    );
+    let sliding = CollisionParams {
+        pinned_zones_slide: true,
+        ..zones_only
+    };
+    let mut x1 = proposed.clone();
+    let stats = resolve_pinned(&m.triangles, &x0, &mut x1, &pinned, &sliding).expect("resolved");
+    assert!(stats.impact_zones > 0);
+    assert_clean(&m, &x0, &x1);
+    for (v, p) in pinned.iter().enumerate() {
+        if p[0] {
+            assert_eq!(x1[v].x, proposed[v].x, "vertex {v}");
+        }
+    }
+}
