@@ -21,7 +21,7 @@ use super::connectivity::Connectivity;
 use super::flow::{FlowStep, MeshFlow};
 use super::intersection::self_intersections;
 use super::params::{FrontParams, Integrator};
-use super::remesh::{improve, RemeshStats};
+use super::remesh::{improve, Keep, RemeshStats};
 use super::response::{resolve_pinned, CollisionParams};
 use super::topology::regions::regions;
 use crate::contour::{MdTree, PhaseSampler, TriplePoints};
@@ -39,6 +39,27 @@ use crate::tracker::{InterfaceTracker, StepStats, TrackerError};
 /// static drop into grid-scale capillary waves (at 32 cells across, 2.0e-5 m/s with the start
 /// on the exact circle but those collapses left to the steps, 4.1e-6 without them).
 const START_COLLAPSE_MARGIN: f64 = 1.05;
+
+/// Plain positions, creases kept: the start's remeshing (it may be handed to a mesh-driven
+/// flow; with volume-keeping collapses the 64-cell `foam` test ran past 12 minutes in release,
+/// not 22 s) and that of explicit mesh-driven flows.
+const KEEP_CREASES: Keep = Keep {
+    volumes: false,
+    junction_creases: true,
+};
+
+/// Under mean-curvature flow a vertex on a junction is classed by the junction alone. A
+/// contoured start's junctions zig-zag (a median turn of 40° per vertex on the 64-cell foam)
+/// and bend the films beside them (median dihedral 59° on planar Voronoi films), which made
+/// 5175 of its 6518 junction vertices peaks that no collapse may touch: the start stopped at
+/// 80 K triangles where the 256-region foam's first frame ends at 43 K. The flow straightens
+/// both within its first substeps, and it keeps no crease (a velocity field does: `zalesak`'s
+/// notch corners lie on its junction, and classed this way at 32³ they rounded from 0.0076 to
+/// 0.0107 off the exact edges).
+const FLOW_KEEPS: Keep = Keep {
+    volumes: false,
+    junction_creases: false,
+};
 
 /// Why a front tracker could not be built.
 #[derive(Debug, Error, PartialEq)]
@@ -179,23 +200,7 @@ impl FrontTracker {
             flow_steps: 0,
             gives_back: false,
         };
-        // A contoured mesh is far from the target sizing: remesh until the bulk of the work is
-        // done, so that the first steps do not carry it (at most 4 passes), collapsing edges a
-        // little past the steps' bound (`START_COLLAPSE_MARGIN`).
-        let mut start_params = tracker.params.clone();
-        let wider = start_params.min_edge * START_COLLAPSE_MARGIN;
-        if tracker.exact_start() && 2.0 * wider < start_params.max_edge {
-            start_params.min_edge = wider;
-        }
-        for _ in 0..4 {
-            // Plain positions: the start may be handed to a mesh-driven flow (with volume-keeping
-            // collapses here the 64-cell `foam` test ran past 12 minutes in release, not 22 s).
-            let stats = improve(&mut tracker.c, &start_params, tracker.target, false);
-            tracker.report.remesh = stats;
-            if stats.splits + stats.collapses < tracker.c.mesh.triangles.len() / 1000 {
-                break;
-            }
-        }
+        tracker.coarsen_start(KEEP_CREASES);
         Ok(tracker)
     }
 
@@ -236,6 +241,24 @@ impl FrontTracker {
         Ok(tracker)
     }
 
+    /// A contoured mesh is far from the target sizing: remeshes until the bulk of the work is
+    /// done, so that the first steps do not carry it (at most 4 passes), collapsing edges a
+    /// little past the steps' bound (`START_COLLAPSE_MARGIN`).
+    fn coarsen_start(&mut self, keep: Keep) {
+        let mut start_params = self.params.clone();
+        let wider = start_params.min_edge * START_COLLAPSE_MARGIN;
+        if self.exact_start() && 2.0 * wider < start_params.max_edge {
+            start_params.min_edge = wider;
+        }
+        for _ in 0..4 {
+            let stats = improve(&mut self.c, &start_params, self.target, keep);
+            self.report.remesh = stats;
+            if stats.splits + stats.collapses < self.c.mesh.triangles.len() / 1000 {
+                break;
+            }
+        }
+    }
+
     /// Whether the start is put on the initial interface ([`FrontParams::exact_start`]).
     fn exact_start(&self) -> bool {
         self.params.exact_start.unwrap_or(false)
@@ -259,8 +282,12 @@ impl FrontTracker {
     }
 
     /// Moves the mesh by `flow` from now on: `advance` then ignores its velocity field and
-    /// takes as many substeps as the travel limit needs.
+    /// takes as many substeps as the travel limit needs. Mean-curvature flow first coarsens
+    /// the start again with its junctions as ridges ([`FLOW_KEEPS`]).
     pub fn set_flow(&mut self, flow: MeshFlow) {
+        if flow.is_implicit() {
+            self.coarsen_start(FLOW_KEEPS);
+        }
         self.flow = Some(flow);
         self.collision.pinned_zones_slide = true;
     }
@@ -316,10 +343,11 @@ impl FrontTracker {
             } else {
                 TopologyCounts::default()
             };
-            // Plain positions under mesh-driven flows: with volume-keeping collapses the
-            // mean-curvature extinction of a sphere comes 2.5 % late (0.5 % with plain ones,
-            // whose losses hid the flow's own lag), outside the 2 % its test holds it to.
-            let stats = improve(&mut self.c, &self.params, self.target, false);
+            // Plain positions: with volume-keeping collapses the mean-curvature extinction of
+            // a sphere comes 2.5 % late (0.5 % with plain ones, whose losses hid the flow's own
+            // lag), outside the 2 % its test holds it to.
+            let keep = if implicit { FLOW_KEEPS } else { KEEP_CREASES };
+            let stats = improve(&mut self.c, &self.params, self.target, keep);
             remesh = remesh.plus(&stats);
             let separated = self.separate(T1Rule::Area(flow));
             self.report.topology = self.report.topology.plus(&merged).plus(&separated);
@@ -527,7 +555,11 @@ impl InterfaceTracker for FrontTracker {
                 .gives_back
                 .then(|| self.c.mesh.phase_volumes(self.n_phases));
             let merged = self.merge(0.0, Some(self.background));
-            self.report.remesh = improve(&mut self.c, &self.params, self.target, true);
+            let keep = Keep {
+                volumes: true,
+                junction_creases: true,
+            };
+            self.report.remesh = improve(&mut self.c, &self.params, self.target, keep);
             let separated = self.separate(T1Rule::Field(velocity, t + dt));
             self.report.topology = merged.plus(&separated);
             // Remeshing alone keeps volumes to first order by construction; giving back its

@@ -58,18 +58,23 @@ impl RemeshStats {
     }
 }
 
-/// Remeshes `c` in place toward edge length `target` and compacts it (indices change); with
-/// `keep_volumes`, collapses and ridge moves are placed so that no phase's volume changes
-/// (see `remesh/volume.rs`).
-pub fn improve(
-    c: &mut Connectivity,
-    params: &FrontParams,
-    target: f64,
-    keep_volumes: bool,
-) -> RemeshStats {
+/// What one remeshing call keeps beyond its bounds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Keep {
+    /// Collapses and ridge moves are placed so that no phase's volume changes (see
+    /// `remesh/volume.rs`).
+    pub volumes: bool,
+    /// Dihedral features at vertices on non-manifold curves ([`Remesher::junction_ridges`]
+    /// when false).
+    pub junction_creases: bool,
+}
+
+/// Remeshes `c` in place toward edge length `target` and compacts it (indices change).
+pub fn improve(c: &mut Connectivity, params: &FrontParams, target: f64, keep: Keep) -> RemeshStats {
     let mut r = Remesher::new(c, Bounds::new(params, target));
     r.butterfly = params.butterfly;
-    r.keep_volumes = keep_volumes;
+    r.keep_volumes = keep.volumes;
+    r.junction_ridges = !keep.junction_creases;
     r.split_pass();
     r.collapse_pass();
     r.flip_pass();
@@ -138,6 +143,9 @@ pub(crate) struct Remesher<'a> {
     butterfly: bool,
     /// Collapses and ridge moves keep every phase's volume ([`improve`]).
     pub(crate) keep_volumes: bool,
+    /// A vertex on a non-manifold curve is classed by that curve alone, its films' dihedral
+    /// angles ignored ([`Keep::junction_creases`] false).
+    pub(crate) junction_ridges: bool,
     pub(crate) stats: RemeshStats,
     /// Runs the invariant checks after every operation (tests).
     #[cfg(test)]
@@ -167,6 +175,7 @@ impl<'a> Remesher<'a> {
             coincident: false,
             butterfly: false,
             keep_volumes: true,
+            junction_ridges: false,
             stats: RemeshStats::default(),
             #[cfg(test)]
             verify: false,

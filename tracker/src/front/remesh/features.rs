@@ -69,6 +69,13 @@ impl Remesher<'_> {
                 feature_neighbours.push(u);
             }
         }
+        if self.junction_ridges
+            && feature_neighbours
+                .iter()
+                .any(|&u| self.c.edge_valence(v, u) != 2)
+        {
+            feature_neighbours.retain(|&u| self.c.edge_valence(v, u) != 2);
+        }
         let kind = match feature_neighbours.len() {
             0 => Kind::Smooth,
             1 | 2 => Kind::Ridge,

@@ -5,6 +5,7 @@
 use glam::DVec3;
 use polyphase_grid::PhaseId;
 
+use super::features::Kind;
 use super::{RemeshStats, Remesher};
 use crate::front::connectivity::Connectivity;
 use crate::front::intersection::self_intersections;
@@ -237,4 +238,49 @@ fn only_moves_within_the_walls_keep_the_domain() {
         &[film([a, b, c])],
         &[film([a, b, d])]
     ));
+}
+
+#[test]
+fn a_junction_vertex_is_classed_by_its_junction_not_by_bent_films_beside_it() {
+    // Two phases below y = 0.5 split at x = 0.5, a third above: a junction line along z at
+    // (0.5, 0.5); a film vertex beside its middle vertex is pushed off the y = 0.5 film.
+    let mut mesh = lattice_mesh(4, |i, j, _| match (i < 2, j < 2) {
+        (true, true) => 0,
+        (false, true) => 1,
+        _ => 2,
+    });
+    let at = |p: DVec3| mesh.vertices.iter().position(|v| (*v - p).length() < 1e-12);
+    let junction = at(DVec3::new(0.5, 0.5, 0.5)).unwrap() as u32;
+    let bent = at(DVec3::new(0.25, 0.5, 0.5)).unwrap();
+    mesh.vertices[bent].y += 0.25;
+    let mut c = Connectivity::new(mesh);
+    let mut r = Remesher::new(&mut c, Bounds::new(&FrontParams::default(), 0.25));
+    let neighbours = r.c.neighbours(junction);
+    let junction_neighbours: Vec<u32> = neighbours
+        .iter()
+        .copied()
+        .filter(|&u| r.c.edge_valence(junction, u) != 2)
+        .collect();
+    assert_eq!(
+        junction_neighbours.len(),
+        2,
+        "a straight junction through the vertex"
+    );
+    // The bend makes a manifold edge at the junction vertex a feature by its dihedral angle
+    // (45° against the 30° threshold) ...
+    assert!(neighbours
+        .iter()
+        .any(|&u| r.c.edge_valence(junction, u) == 2 && r.is_feature_edge(junction, u)));
+    // ... which makes the vertex a peak that no collapse along the junction may move, unless
+    // only the junction counts there: then it is a ridge along it.
+    assert_eq!(r.vertex_features(junction).kind, Kind::Peak);
+    r.junction_ridges = true;
+    let features = r.vertex_features(junction);
+    assert_eq!(features.kind, Kind::Ridge);
+    assert!(features.non_manifold);
+    let mut along = features.feature_neighbours.clone();
+    along.sort_unstable();
+    assert_eq!(along, junction_neighbours);
+    // A manifold vertex keeps its dihedral features: the bent vertex is a feature itself.
+    assert_ne!(r.vertex_features(bent as u32).kind, Kind::Smooth);
 }
