@@ -166,6 +166,13 @@ fn front_run_killed_mid_run_and_resumed_matches_uninterrupted_run() {
 }
 
 #[test]
+fn mean_curvature_run_killed_mid_run_and_resumed_matches_uninterrupted_run() {
+    // Mean-curvature flow coarsens a new tracker's start once more (junctions as ridges); a
+    // restored one must not, or the resumed frames drift from the uninterrupted run's.
+    kill_resume_and_compare("resume_mcf", ("mcf_t2", 16, 6, &[]), "frames/0002.ply");
+}
+
+#[test]
 fn front_coupled_run_killed_mid_run_and_resumed_matches_uninterrupted_run() {
     // The front tracker driving the fluid (issue 12): the checkpoint holds the mesh, the
     // solver's state and the steps the tracker has not yet followed; frames and stats lines

@@ -82,8 +82,10 @@ pub fn build_tracker(
                     scene.file.name
                 ))
             })?;
-            if let Some(flow) = &scene.mesh_flow {
-                tracker.set_flow(flow.clone());
+            match (&scene.mesh_flow, restoring) {
+                (Some(flow), false) => tracker.start_flow(flow.clone()),
+                (Some(flow), true) => tracker.set_flow(flow.clone()),
+                (None, _) => {}
             }
             tracker.set_volume_correction(scene.file.volume_correction);
             let first = match restoring {

@@ -282,14 +282,20 @@ impl FrontTracker {
     }
 
     /// Moves the mesh by `flow` from now on: `advance` then ignores its velocity field and
-    /// takes as many substeps as the travel limit needs. Mean-curvature flow first coarsens
-    /// the start again with its junctions as ridges ([`FLOW_KEEPS`]).
+    /// takes as many substeps as the travel limit needs. A restored tracker takes its flow
+    /// here; a new one through [`FrontTracker::start_flow`].
     pub fn set_flow(&mut self, flow: MeshFlow) {
+        self.flow = Some(flow);
+        self.collision.pinned_zones_slide = true;
+    }
+
+    /// [`FrontTracker::set_flow`] on a new tracker: mean-curvature flow first coarsens the
+    /// start again with its junctions as ridges ([`FLOW_KEEPS`]).
+    pub fn start_flow(&mut self, flow: MeshFlow) {
         if flow.is_implicit() {
             self.coarsen_start(FLOW_KEEPS);
         }
-        self.flow = Some(flow);
-        self.collision.pinned_zones_slide = true;
+        self.set_flow(flow);
     }
 
     /// Advances by the mesh-driven flow over `dt` in substeps, each one moved collision-safely
