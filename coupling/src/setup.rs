@@ -66,9 +66,14 @@ pub fn build_tracker(
             let params = scene.file.tracker.front.clone().unwrap_or_default();
             let restoring = snapshot.is_some();
             let built = match snapshot {
-                None => {
-                    FrontTracker::from_sampler(scene.grid, &initial, n_phases, background, params)
-                }
+                None => FrontTracker::from_sampler_with(
+                    scene.grid,
+                    &initial,
+                    n_phases,
+                    background,
+                    params,
+                    scene.mesh_flow.clone(),
+                ),
                 Some(TrackerSnapshot::Front(state)) => {
                     FrontTracker::from_state(state, n_phases, background, params)
                 }
@@ -82,10 +87,8 @@ pub fn build_tracker(
                     scene.file.name
                 ))
             })?;
-            match (&scene.mesh_flow, restoring) {
-                (Some(flow), false) => tracker.start_flow(flow.clone()),
-                (Some(flow), true) => tracker.set_flow(flow.clone()),
-                (None, _) => {}
+            if let (Some(flow), true) = (&scene.mesh_flow, restoring) {
+                tracker.set_flow(flow.clone());
             }
             tracker.set_volume_correction(scene.file.volume_correction);
             let first = match restoring {

@@ -169,6 +169,18 @@ impl FrontTracker {
         background: PhaseId,
         params: FrontParams,
     ) -> Result<FrontTracker, FrontError> {
+        FrontTracker::start(mesh, n_phases, background, params, None)
+    }
+
+    /// [`FrontTracker::new`] moved by `flow` from the start: under mean-curvature flow the
+    /// start is coarsened with its junctions as ridges ([`FLOW_KEEPS`]).
+    fn start(
+        mesh: LabeledMesh,
+        n_phases: usize,
+        background: PhaseId,
+        params: FrontParams,
+        flow: Option<MeshFlow>,
+    ) -> Result<FrontTracker, FrontError> {
         check(&mesh, 0.0)?;
         match self_intersections(&mesh).len() {
             0 => {}
@@ -200,7 +212,17 @@ impl FrontTracker {
             flow_steps: 0,
             gives_back: false,
         };
-        tracker.coarsen_start(KEEP_CREASES);
+        match flow {
+            Some(flow) => {
+                tracker.coarsen_start(if flow.is_implicit() {
+                    FLOW_KEEPS
+                } else {
+                    KEEP_CREASES
+                });
+                tracker.set_flow(flow);
+            }
+            None => tracker.coarsen_start(KEEP_CREASES),
+        }
         Ok(tracker)
     }
 
@@ -213,7 +235,21 @@ impl FrontTracker {
         initial: &dyn PhaseSampler,
         n_phases: usize,
         background: PhaseId,
+        params: FrontParams,
+    ) -> Result<FrontTracker, FrontError> {
+        FrontTracker::from_sampler_with(grid, initial, n_phases, background, params, None)
+    }
+
+    /// [`FrontTracker::from_sampler`], moved by `flow` (when given) from the start: a new
+    /// tracker's mesh-driven flow is set here, a restored one's with
+    /// [`FrontTracker::set_flow`].
+    pub fn from_sampler_with(
+        grid: GridSpec,
+        initial: &dyn PhaseSampler,
+        n_phases: usize,
+        background: PhaseId,
         mut params: FrontParams,
+        flow: Option<MeshFlow>,
     ) -> Result<FrontTracker, FrontError> {
         // Contoured at half the spacing, the start has its sharp edges and junctions twice as
         // close to the exact ones; remeshing coarsens it to the target while keeping features.
@@ -226,7 +262,7 @@ impl FrontTracker {
         params.edge_length = Some(params.edge_length.unwrap_or(grid.h));
         let (mut mesh, box_volume) = detach_box(contour, background);
         untangle(&mut mesh).map_err(FrontError::Intersecting)?;
-        let mut tracker = FrontTracker::new(mesh, n_phases, background, params)?;
+        let mut tracker = FrontTracker::start(mesh, n_phases, background, params, flow)?;
         tracker.detached_volume = box_volume;
         // Coarsening left its vertices a sagitta off the exact interface: put them back on it,
         // unless that would make two triangles intersect (then the start stays as remeshed).
@@ -283,19 +319,10 @@ impl FrontTracker {
 
     /// Moves the mesh by `flow` from now on: `advance` then ignores its velocity field and
     /// takes as many substeps as the travel limit needs. A restored tracker takes its flow
-    /// here; a new one through [`FrontTracker::start_flow`].
+    /// here; a new one through [`FrontTracker::from_sampler_with`].
     pub fn set_flow(&mut self, flow: MeshFlow) {
         self.flow = Some(flow);
         self.collision.pinned_zones_slide = true;
-    }
-
-    /// [`FrontTracker::set_flow`] on a new tracker: mean-curvature flow first coarsens the
-    /// start again with its junctions as ridges ([`FLOW_KEEPS`]).
-    pub fn start_flow(&mut self, flow: MeshFlow) {
-        if flow.is_implicit() {
-            self.coarsen_start(FLOW_KEEPS);
-        }
-        self.set_flow(flow);
     }
 
     /// Advances by the mesh-driven flow over `dt` in substeps, each one moved collision-safely
