@@ -97,8 +97,8 @@ fn fit_plane(points: &[DVec3]) -> (DVec3, DVec3) {
 /// spherical caps and a plane (each bubble's angle between its cap and the disk at the rim,
 /// cos θ = ±(distance of the cap's centre from the disk's plane)/R), with the per-edge
 /// triangle-plane angles reported beside them: those are chords, biased by the caps'
-/// curvature and noisy where a remesh just touched an edge (mean 18.6°, worst 33.0° off 120°
-/// at 16³, where the fitted angles are within 1.5°).
+/// curvature and noisy where a remesh just touched an edge (mean 18.8°, worst 44.6° off 120°
+/// at 16³, where the fitted angles are within 2.1°).
 #[test]
 fn double_bubble_settles_to_plateau_angles() {
     let (tracker, before, after) = run_checked("double_bubble", 16, None);
