@@ -212,16 +212,12 @@ impl FrontTracker {
             flow_steps: 0,
             gives_back: false,
         };
-        match flow {
-            Some(flow) => {
-                tracker.coarsen_start(if flow.is_implicit() {
-                    FLOW_KEEPS
-                } else {
-                    KEEP_CREASES
-                });
-                tracker.set_flow(flow);
-            }
-            None => tracker.coarsen_start(KEEP_CREASES),
+        tracker.coarsen_start(match &flow {
+            Some(flow) if flow.is_implicit() => FLOW_KEEPS,
+            _ => KEEP_CREASES,
+        });
+        if let Some(flow) = flow {
+            tracker.set_flow(flow);
         }
         Ok(tracker)
     }
