@@ -61,6 +61,12 @@ const FLOW_KEEPS: Keep = Keep {
     junction_creases: false,
 };
 
+/// Remeshing in a velocity field: every phase's volume and every crease kept.
+const FIELD_KEEPS: Keep = Keep {
+    volumes: true,
+    junction_creases: true,
+};
+
 /// Why a front tracker could not be built.
 #[derive(Debug, Error, PartialEq)]
 pub enum FrontError {
@@ -584,11 +590,7 @@ impl InterfaceTracker for FrontTracker {
                 .gives_back
                 .then(|| self.c.mesh.phase_volumes(self.n_phases));
             let merged = self.merge(0.0, Some(self.background));
-            let keep = Keep {
-                volumes: true,
-                junction_creases: true,
-            };
-            self.report.remesh = improve(&mut self.c, &self.params, self.target, keep);
+            self.report.remesh = improve(&mut self.c, &self.params, self.target, FIELD_KEEPS);
             let separated = self.separate(T1Rule::Field(velocity, t + dt));
             self.report.topology = merged.plus(&separated);
             // Remeshing alone keeps volumes to first order by construction; giving back its

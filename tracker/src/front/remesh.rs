@@ -64,8 +64,7 @@ pub struct Keep {
     /// Collapses and ridge moves are placed so that no phase's volume changes (see
     /// `remesh/volume.rs`).
     pub volumes: bool,
-    /// Dihedral features at vertices on non-manifold curves ([`Remesher::junction_ridges`]
-    /// when false).
+    /// Dihedral features at vertices on non-manifold curves ([`Remesher::junction_creases`]).
     pub junction_creases: bool,
 }
 
@@ -74,7 +73,7 @@ pub fn improve(c: &mut Connectivity, params: &FrontParams, target: f64, keep: Ke
     let mut r = Remesher::new(c, Bounds::new(params, target));
     r.butterfly = params.butterfly;
     r.keep_volumes = keep.volumes;
-    r.junction_ridges = !keep.junction_creases;
+    r.junction_creases = keep.junction_creases;
     r.split_pass();
     r.collapse_pass();
     r.flip_pass();
@@ -143,9 +142,9 @@ pub(crate) struct Remesher<'a> {
     butterfly: bool,
     /// Collapses and ridge moves keep every phase's volume ([`improve`]).
     pub(crate) keep_volumes: bool,
-    /// A vertex on a non-manifold curve is classed by that curve alone, its films' dihedral
-    /// angles ignored ([`Keep::junction_creases`] false).
-    pub(crate) junction_ridges: bool,
+    /// A vertex on a non-manifold curve counts its films' dihedral features too; when false it
+    /// is classed by that curve alone ([`Keep::junction_creases`]).
+    pub(crate) junction_creases: bool,
     pub(crate) stats: RemeshStats,
     /// Runs the invariant checks after every operation (tests).
     #[cfg(test)]
@@ -175,7 +174,7 @@ impl<'a> Remesher<'a> {
             coincident: false,
             butterfly: false,
             keep_volumes: true,
-            junction_ridges: false,
+            junction_creases: true,
             stats: RemeshStats::default(),
             #[cfg(test)]
             verify: false,

@@ -60,22 +60,22 @@ impl Remesher<'_> {
     /// Feature class of vertex `v`.
     pub(super) fn vertex_features(&self, v: u32) -> VertexFeatures {
         let mut non_manifold = self.c.vertex_regions(v).len() > 2;
-        let mut feature_neighbours = Vec::new();
+        // Each feature neighbour, and whether its edge is non-manifold (a junction edge).
+        let mut features = Vec::new();
         for u in self.c.neighbours(v) {
             if self.c.edge_valence(v, u) != 2 {
                 non_manifold = true;
-                feature_neighbours.push(u);
+                features.push((u, true));
             } else if self.is_feature_edge(v, u) {
-                feature_neighbours.push(u);
+                features.push((u, false));
             }
         }
-        if self.junction_ridges
-            && feature_neighbours
-                .iter()
-                .any(|&u| self.c.edge_valence(v, u) != 2)
-        {
-            feature_neighbours.retain(|&u| self.c.edge_valence(v, u) != 2);
-        }
+        let junction_only = !self.junction_creases && features.iter().any(|&(_, on)| on);
+        let feature_neighbours: Vec<u32> = features
+            .into_iter()
+            .filter(|&(_, on)| on || !junction_only)
+            .map(|(u, _)| u)
+            .collect();
         let kind = match feature_neighbours.len() {
             0 => Kind::Smooth,
             1 | 2 => Kind::Ridge,

@@ -274,7 +274,7 @@ fn a_junction_vertex_is_classed_by_its_junction_not_by_bent_films_beside_it() {
     // ... which makes the vertex a peak that no collapse along the junction may move, unless
     // only the junction counts there: then it is a ridge along it.
     assert_eq!(r.vertex_features(junction).kind, Kind::Peak);
-    r.junction_ridges = true;
+    r.junction_creases = false;
     let features = r.vertex_features(junction);
     assert_eq!(features.kind, Kind::Ridge);
     assert!(features.non_manifold);
