@@ -55,13 +55,11 @@ impl VelocityField for AnalyticVelocity {
                 DVec3::new(-omega * r.y, omega * r.x, 0.0)
             }
             AnalyticVelocity::Enright { period } => {
+                // sin 2πx = 2 sin πx cos πx: three sin_cos instead of six sines (the field is
+                // most of the departure tracing's cost).
                 let c = (PI * t / period).cos();
-                let (sx, sy, sz) = ((PI * x.x).sin(), (PI * x.y).sin(), (PI * x.z).sin());
-                let (s2x, s2y, s2z) = (
-                    (2.0 * PI * x.x).sin(),
-                    (2.0 * PI * x.y).sin(),
-                    (2.0 * PI * x.z).sin(),
-                );
+                let [(sx, cx), (sy, cy), (sz, cz)] = [x.x, x.y, x.z].map(|v| (PI * v).sin_cos());
+                let (s2x, s2y, s2z) = (2.0 * sx * cx, 2.0 * sy * cy, 2.0 * sz * cz);
                 DVec3::new(
                     2.0 * sx * sx * s2y * s2z,
                     -s2x * sy * sy * s2z,
@@ -118,6 +116,28 @@ mod tests {
                 );
                 assert!(f.velocity(x, 0.0).length() <= bound + 1e-12);
             }
+        }
+    }
+
+    #[test]
+    fn enright_field_is_enright_et_al_formula() {
+        let f = AnalyticVelocity::Enright { period: 3.0 };
+        for i in 0..200 {
+            let s = i as f64;
+            let x = DVec3::new(
+                (s * 0.618).fract(),
+                (s * 0.414).fract(),
+                (s * 0.732).fract(),
+            );
+            let t = 0.3 * s / 200.0;
+            let sin = |k: f64, v: f64| (k * PI * v).sin();
+            let u = DVec3::new(
+                2.0 * sin(1.0, x.x).powi(2) * sin(2.0, x.y) * sin(2.0, x.z),
+                -sin(2.0, x.x) * sin(1.0, x.y).powi(2) * sin(2.0, x.z),
+                -sin(2.0, x.x) * sin(2.0, x.y) * sin(1.0, x.z).powi(2),
+            ) * (PI * t / 3.0).cos();
+            // Products of a few sines of magnitude ≤ 2: the two evaluations differ by rounding.
+            assert!((f.velocity(x, t) - u).length() < 1e-14, "{x}");
         }
     }
 
