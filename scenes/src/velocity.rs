@@ -90,6 +90,20 @@ mod tests {
         d(DVec3::X).x + d(DVec3::Y).y + d(DVec3::Z).z
     }
 
+    /// 200 points spread over the unit cube (golden-ratio-like strides), each with a time in
+    /// [0, 0.3).
+    fn samples() -> impl Iterator<Item = (DVec3, f64)> {
+        (0..200).map(|i| {
+            let s = i as f64;
+            let x = DVec3::new(
+                (s * 0.618).fract(),
+                (s * 0.414).fract(),
+                (s * 0.732).fract(),
+            );
+            (x, 0.3 * s / 200.0)
+        })
+    }
+
     #[test]
     fn fields_are_divergence_free_and_bounded() {
         let fields = [
@@ -102,18 +116,9 @@ mod tests {
         ];
         for f in &fields {
             let bound = f.max_speed(DVec3::ZERO, DVec3::ONE);
-            for i in 0..200 {
-                let s = i as f64;
-                let x = DVec3::new(
-                    (s * 0.618).fract(),
-                    (s * 0.414).fract(),
-                    (s * 0.732).fract(),
-                );
+            for (x, t) in samples() {
                 // Truncation of the central difference is ~1e-7 for these O(10) derivatives.
-                assert!(
-                    divergence(f, x, 0.3 * s / 200.0).abs() < 1e-6,
-                    "{f:?} at {x}"
-                );
+                assert!(divergence(f, x, t).abs() < 1e-6, "{f:?} at {x}");
                 assert!(f.velocity(x, 0.0).length() <= bound + 1e-12);
             }
         }
@@ -122,14 +127,7 @@ mod tests {
     #[test]
     fn enright_field_is_enright_et_al_formula() {
         let f = AnalyticVelocity::Enright { period: 3.0 };
-        for i in 0..200 {
-            let s = i as f64;
-            let x = DVec3::new(
-                (s * 0.618).fract(),
-                (s * 0.414).fract(),
-                (s * 0.732).fract(),
-            );
-            let t = 0.3 * s / 200.0;
+        for (x, t) in samples() {
             let sin = |k: f64, v: f64| (k * PI * v).sin();
             let u = DVec3::new(
                 2.0 * sin(1.0, x.x).powi(2) * sin(2.0, x.y) * sin(2.0, x.z),
