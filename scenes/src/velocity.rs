@@ -55,8 +55,8 @@ impl VelocityField for AnalyticVelocity {
                 DVec3::new(-omega * r.y, omega * r.x, 0.0)
             }
             AnalyticVelocity::Enright { period } => {
-                // sin 2πx = 2 sin πx cos πx: three sin_cos instead of six sines (the field is
-                // most of the departure tracing's cost).
+                // sin 2πx = 2 sin πx cos πx: three sin_cos instead of six sines (the sines were
+                // 12 % of `enright` 64³'s CPU time under perf).
                 let c = (PI * t / period).cos();
                 let [(sx, cx), (sy, cy), (sz, cz)] = [x.x, x.y, x.z].map(|v| (PI * v).sin_cos());
                 let (s2x, s2y, s2z) = (2.0 * sx * cx, 2.0 * sy * cy, 2.0 * sz * cz);
