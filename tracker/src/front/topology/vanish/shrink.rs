@@ -7,7 +7,8 @@
 //! pseudo-motion; the other bounds are relaxed as in the fail-safe pass (Appendix A.4), and
 //! collapses may join different non-manifold curves, which a shrinking junction cell must.
 
-use polyphase_grid::PhaseId;
+use glam::DVec3;
+use polyphase_grid::{PhaseId, OUTSIDE};
 
 use super::{region_count, Region};
 use crate::front::connectivity::Connectivity;
@@ -70,7 +71,7 @@ pub(super) fn shrink(
 }
 
 /// Collapses the shortest edge of `triangles` that passes the checks of the module doc and
-/// moves no vertex of a domain wall off its place; returns the vertex kept.
+/// moves no vertex of a domain wall off its wall; returns the vertex kept.
 fn collapse_shortest(r: &mut Remesher, triangles: &[u32]) -> Option<u32> {
     let c = &*r.c;
     let mut edges: Vec<[u32; 2]> = triangles
@@ -91,10 +92,7 @@ fn collapse_shortest(r: &mut Remesher, triangles: &[u32]) -> Option<u32> {
         let Some((keep, _, p)) = r.collapse_target(a, b) else {
             continue;
         };
-        if [a, b]
-            .iter()
-            .any(|&v| r.c.on_boundary(v) && r.c.position(v) != p)
-        {
+        if [a, b].iter().any(|&v| !stays_on_walls(r.c, v, p)) {
             continue;
         }
         if r.try_collapse(a, b) {
@@ -102,6 +100,20 @@ fn collapse_shortest(r: &mut Remesher, triangles: &[u32]) -> Option<u32> {
         }
     }
     None
+}
+
+/// Whether `v` may move to `p`: it stays in the plane of every domain-boundary face at it
+/// (the box's walls are axis-aligned: the face's common coordinate, compared exactly). A
+/// region pressed against a wall shrinks only by collapses along the wall; refusing every
+/// move of a wall vertex left such regions in place (`foam`, README "Foam").
+fn stays_on_walls(c: &Connectivity, v: u32, p: DVec3) -> bool {
+    c.vertex_triangles(v)
+        .iter()
+        .filter(|&&t| c.labels(t).contains(&OUTSIDE))
+        .all(|&t| {
+            let corners = c.triangle(t).map(|u| c.position(u));
+            (0..3).any(|k| corners.iter().all(|x| x[k] == p[k]))
+        })
 }
 
 /// The vertices of live `triangles`, sorted.
@@ -202,5 +214,53 @@ mod tests {
             "{air} -> {}",
             background(&after)
         );
+    }
+
+    #[test]
+    fn pocket_against_a_wall_shrinks_along_the_wall() {
+        // 4³ box: phase 1 below z = 1/2, a pocket of phase 2 in the cell (0, 1, 1) on the
+        // wall x = 0 (one of its faces is the wall's), beside the phase-1 cells around it.
+        let mesh = lattice_mesh(4, |i, j, k| match (i, j, k) {
+            (0, 1, 1) => 2,
+            (_, _, k) => PhaseId::from(k < 2),
+        });
+        let mut c = Connectivity::new(mesh);
+        let all = regions(&c);
+        let pocket = all
+            .iter()
+            .find(|r| r.phase == 2)
+            .expect("the pocket is a region")
+            .clone();
+        let min_volume = 0.4f64.powi(3);
+        let after = shrink(
+            &mut c,
+            &FrontParams::default(),
+            0.8,
+            &pocket,
+            &all,
+            min_volume,
+        )
+        .expect("the pocket shrinks away");
+        assert_eq!(after.len() + 1, all.len());
+        let mesh = clean(&c);
+        crate::invariants::check(&mesh, 0.0).expect("closed and label-consistent");
+        assert!(self_intersections(&mesh).is_empty());
+        // The collapses slid wall vertices along the wall: every wall face still lies in a
+        // plane of the box, exactly.
+        let lo = mesh.vertices.iter().fold(DVec3::INFINITY, |a, &b| a.min(b));
+        let hi = mesh
+            .vertices
+            .iter()
+            .fold(DVec3::NEG_INFINITY, |a, &b| a.max(b));
+        for (t, labels) in mesh.triangles.iter().zip(&mesh.labels) {
+            if labels.contains(&OUTSIDE) {
+                let x = t.map(|v| mesh.vertices[v as usize]);
+                assert!(
+                    (0..3).any(|k| x.iter().all(|p| p[k] == lo[k])
+                        || x.iter().all(|p| p[k] == hi[k])),
+                    "{x:?}"
+                );
+            }
+        }
     }
 }
