@@ -74,8 +74,15 @@ pub fn build_tracker(
                     params,
                     scene.mesh_flow.clone(),
                 ),
+                // A restored tracker takes its flow after the fact: its mesh is not coarsened
+                // again.
                 Some(TrackerSnapshot::Front(state)) => {
-                    FrontTracker::from_state(state, n_phases, background, params)
+                    FrontTracker::from_state(state, n_phases, background, params).map(|mut t| {
+                        if let Some(flow) = &scene.mesh_flow {
+                            t.set_flow(flow.clone());
+                        }
+                        t
+                    })
                 }
                 Some(TrackerSnapshot::Contour { .. }) => {
                     return Err(other_kind(scene, "a contouring", "the front"))
@@ -87,9 +94,6 @@ pub fn build_tracker(
                     scene.file.name
                 ))
             })?;
-            if let (Some(flow), true) = (&scene.mesh_flow, restoring) {
-                tracker.set_flow(flow.clone());
-            }
             tracker.set_volume_correction(scene.file.volume_correction);
             let first = match restoring {
                 true => StepStats::default(),
