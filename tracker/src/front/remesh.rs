@@ -134,9 +134,11 @@ pub(crate) struct Remesher<'a> {
     /// §5.1.7: the collapse that starts a T1 process, allowed only where the flow shortens the
     /// edge; set by [`crate::front::topology::separate::collapse_junction_edges`]).
     pub(crate) junction: bool,
-    /// Collapses may leave coincident triangles: a region shrinking to nothing ends as such
-    /// pairs (paper 000 §5.2; set by [`crate::front::topology::vanish`], which resolves them
-    /// at once).
+    /// Collapses may leave coincident triangles and may break the link condition: a region
+    /// shrinking to nothing ends as such pairs, and a flat one pinches into pieces on the way
+    /// (paper 000 §5.2; set by [`crate::front::topology::vanish`], which resolves the pairs at
+    /// once and follows the pieces). Either keeps every edge's half-face balance, so the mesh
+    /// stays closed and label-consistent.
     pub(crate) coincident: bool,
     /// Splits move the new vertex to its butterfly point ([`FrontParams::butterfly`]).
     butterfly: bool,

@@ -39,7 +39,8 @@ pub struct TopologyCounts {
     pub separations: usize,
     /// Coincident triangle pairs removed or relabeled (§5.2, Fig. 14), merging's included.
     pub degenerate: usize,
-    /// Regions removed for being too small (T2).
+    /// Regions removed for being too small (T2), the pieces a flat one pinched into counted
+    /// one by one.
     pub vanished: usize,
 }
 
@@ -84,7 +85,7 @@ impl FrontTracker {
         let min_volume = self.params.min_region_volume * self.target.powi(3);
         if min_volume > 0.0 {
             counts.vanished =
-                remove_small_regions(&mut self.c, &self.params, self.target, min_volume);
+                remove_small_regions(&mut self.c, &self.params, self.target, min_volume).removed;
         }
         self.c.compact();
         self.seconds[3] += start.elapsed().as_secs_f64();

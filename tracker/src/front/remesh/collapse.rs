@@ -84,22 +84,29 @@ impl Remesher<'_> {
 
     /// Collapses edge `(a, b)` if it is topologically valid, within bounds and collision-safe.
     pub(crate) fn try_collapse(&mut self, a: u32, b: u32) -> bool {
-        let mut edge_tris = Vec::new();
-        self.c.edge_triangles(a, b, &mut edge_tris);
-        if edge_tris.is_empty() {
-            return false;
-        }
         let Some((keep, gone, p)) = self.collapse_target(a, b) else {
             self.stats.bound_cancelled += 1;
             return false;
         };
+        self.try_collapse_to(keep, gone, p)
+    }
+
+    /// Collapses edge `(keep, gone)` into `keep` placed at `p` (moved on to keep volumes, as
+    /// in [`Self::try_collapse`]) if it is topologically valid, within bounds and
+    /// collision-safe.
+    pub(crate) fn try_collapse_to(&mut self, keep: u32, gone: u32, p: DVec3) -> bool {
+        let mut edge_tris = Vec::new();
+        self.c.edge_triangles(keep, gone, &mut edge_tris);
+        if edge_tris.is_empty() {
+            return false;
+        }
         // Link condition: the only vertices adjacent to both ends are the apexes of the
-        // triangles on the edge.
+        // triangles on the edge (waived for a vanishing region, [`Remesher::coincident`]).
         let apexes: Vec<u32> = {
             let mut v: Vec<u32> = edge_tris
                 .iter()
                 .flat_map(|&t| self.c.triangle(t))
-                .filter(|&v| v != a && v != b)
+                .filter(|&v| v != keep && v != gone)
                 .collect();
             v.sort_unstable();
             v.dedup();
@@ -107,9 +114,10 @@ impl Remesher<'_> {
         };
         let nk = self.c.neighbours(keep);
         let ng = self.c.neighbours(gone);
-        if nk
-            .iter()
-            .any(|v| *v != gone && ng.binary_search(v).is_ok() && apexes.binary_search(v).is_err())
+        if !self.coincident
+            && nk.iter().any(|v| {
+                *v != gone && ng.binary_search(v).is_ok() && apexes.binary_search(v).is_err()
+            })
         {
             return false;
         }
@@ -174,7 +182,7 @@ impl Remesher<'_> {
         let p = if !self.keep_volumes || self.junction || self.coincident || self.failsafe {
             p
         } else {
-            let length = (self.c.position(a) - self.c.position(b)).length();
+            let length = (self.c.position(keep) - self.c.position(gone)).length();
             volume_preserving(&old, &new_at, p, length)
         };
         let new = new_at(p);

@@ -41,20 +41,28 @@ struct ShapeBounds {
     plane_tolerance: f64,
 }
 
-/// Removes the regions of `c` with volume below `min_volume`, smallest first, and returns how
-/// many were removed; each removal lowers the region count ([`regions`]) by exactly one.
-/// Coincident triangle pairs are resolved first. A region whose contraction is refused is
-/// shrunk by collapses of its edges instead ([`shrink`]); regions both refuse stay.
-/// Removed triangles leave tombstones ([`Connectivity::compact`] squeezes them out).
-/// Of the bounds of `params` at target edge length `target` only the minimum area is kept
-/// (a contraction leaving slivers would hand them to the fail-safe pass); the others are
-/// relaxed as in the fail-safe pass.
+/// What [`remove_small_regions`] did: regions removed, and pieces that shrinking regions split
+/// into on the way (each then removed in turn or left, small); the region count ([`regions`])
+/// fell by `removed − split`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Vanished {
+    pub removed: usize,
+    pub split: usize,
+}
+
+/// Removes the regions of `c` with volume below `min_volume`, smallest first. Coincident
+/// triangle pairs are resolved first. A region whose contraction is refused is shrunk by
+/// collapses of its edges instead ([`shrink`]), which may split it into small pieces first;
+/// regions both refuse stay. Removed triangles leave tombstones ([`Connectivity::compact`]
+/// squeezes them out). Of the bounds of `params` at target edge length `target` only the
+/// minimum area is kept (a contraction leaving slivers would hand them to the fail-safe
+/// pass); the others are relaxed as in the fail-safe pass.
 pub fn remove_small_regions(
     c: &mut Connectivity,
     params: &FrontParams,
     target: f64,
     min_volume: f64,
-) -> usize {
+) -> Vanished {
     remove_degenerate_pairs(c);
     let bounds = ShapeBounds {
         min_area: params.min_area * target * target,
@@ -62,12 +70,12 @@ pub fn remove_small_regions(
         // face is off its plane by ~1e-16 of the coordinates, one on another face by ~L.
         plane_tolerance: 1e-9 * target,
     };
-    let mut removed = 0;
+    let (mut removed, mut split) = (0, 0);
     let mut all = regions(c);
     loop {
         let mut small: Vec<&Region> = all.iter().filter(|r| r.volume < min_volume).collect();
         if small.is_empty() {
-            return removed;
+            return Vanished { removed, split };
         }
         small.sort_by(|x, y| {
             x.volume
@@ -86,7 +94,8 @@ pub fn remove_small_regions(
                 }
                 *c = before.clone();
             }
-            if let Some(after) = shrink(c, params, target, r, &all, min_volume) {
+            if let Some((after, pieces)) = shrink(c, params, target, r, &all, min_volume) {
+                split += pieces;
                 next = Some(after);
                 break;
             }
@@ -97,7 +106,7 @@ pub fn remove_small_regions(
                 all = after;
                 removed += 1;
             }
-            None => return removed,
+            None => return Vanished { removed, split },
         }
     }
 }
@@ -315,16 +324,16 @@ mod tests {
     use crate::mesh::LabeledMesh;
 
     /// Removes the regions below `min_volume` at target edge length `target`, checks the
-    /// region count fell by the number removed and the mesh is clean, and returns
-    /// `(removed, mesh after)`.
+    /// region count fell by the number removed (less the pieces split off) and the mesh is
+    /// clean, and returns `(removed, mesh after)`.
     fn run(mesh: LabeledMesh, target: f64, min_volume: f64) -> (usize, LabeledMesh) {
         crate::invariants::check(&mesh, 0.0).expect("fixture is valid");
         assert!(self_intersections(&mesh).is_empty(), "fixture intersects");
         let mut c = Connectivity::new(mesh);
         let before = regions(&c).len();
-        let removed = remove_small_regions(&mut c, &FrontParams::default(), target, min_volume);
-        assert_eq!(regions(&c).len() + removed, before);
-        (removed, clean(&c))
+        let done = remove_small_regions(&mut c, &FrontParams::default(), target, min_volume);
+        assert_eq!(regions(&c).len() + done.removed, before + done.split);
+        (done.removed, clean(&c))
     }
 
     /// Rounding of the tetra sums of meshes of unit size and a few thousand triangles.
@@ -347,7 +356,8 @@ mod tests {
         // Nothing else is small enough: a second call removes nothing.
         let mut c = Connectivity::new(after.clone());
         let params = FrontParams::default();
-        assert_eq!(remove_small_regions(&mut c, &params, target, 6.4e-5), 0);
+        let done = remove_small_regions(&mut c, &params, target, 6.4e-5);
+        assert_eq!(done, Vanished::default());
         assert_eq!(c.mesh, after);
     }
 

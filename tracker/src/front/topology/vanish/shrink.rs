@@ -18,13 +18,17 @@ use crate::front::topology::degenerate::{coincident_groups, remove_degenerate_pa
 use crate::front::topology::regions::regions;
 
 /// Shrinks `region` (one of `all`, the regions of `c`; smaller than `min_volume`) by collapses
-/// of its edges until the region count drops by exactly one, and returns the regions then.
-/// `None` when a step finds no collapse that passes, leaves coincident triangles that do not
-/// resolve, makes another region smaller than `min_volume`, or changes the count otherwise (a
-/// split or a second region lost); `c` is then partly changed and the caller restores it.
-/// Every collapse joins two of the region's vertices, and a closed region with fewer than four
-/// vertices is degenerate, so a region of n vertices that has not vanished after n collapses
-/// never will: that bounds the attempt.
+/// of its edges until it vanishes, and returns the regions then and how many pieces it split
+/// off on the way. A flat region pinches into pieces as it shrinks (a zero-thickness sliver
+/// pressed between its neighbours, `foam`, README "Foam"): pieces of its phase smaller than
+/// `min_volume` are allowed, the shrinking follows the one at the last collapse and the others
+/// stay, small, for the caller. `None` when a step finds no collapse that passes, leaves
+/// coincident triangles that do not resolve, makes a region of another phase smaller than
+/// `min_volume`, or changes the count otherwise (a second region lost, a large piece split
+/// off); `c` is then partly changed and the caller restores it. Every collapse joins two of
+/// the region's vertices, and a closed region with fewer than four vertices is degenerate, so
+/// a region of n vertices that has not vanished after n collapses never will: that bounds the
+/// attempt.
 pub(super) fn shrink(
     c: &mut Connectivity,
     params: &FrontParams,
@@ -32,10 +36,19 @@ pub(super) fn shrink(
     region: &Region,
     all: &[Region],
     min_volume: f64,
-) -> Option<Vec<Region>> {
-    let count = all.len();
-    let small_before = all.iter().filter(|r| r.volume < min_volume).count();
+) -> Option<(Vec<Region>, usize)> {
     let phase = region.phase;
+    let tally = |all: &[Region]| {
+        let small = all.iter().filter(|r| r.volume < min_volume).count();
+        let small_own = all
+            .iter()
+            .filter(|r| r.volume < min_volume && r.phase == phase)
+            .count();
+        (small, small_own)
+    };
+    let mut count = all.len();
+    let (mut small_before, mut own_before) = tally(all);
+    let mut splits = 0;
     let mut triangles = region.triangles.clone();
     let steps = vertices_of(c, &triangles).len();
     // One remesher (and broad phase) for the whole attempt, not one per collapse (`balls` at
@@ -55,11 +68,15 @@ pub(super) fn shrink(
         let n = region_count(c, &after);
         // Collapses on edges the region shares with a small neighbour (a ball inside a thin
         // shell) can eat that neighbour instead: no other region may become small.
-        let small = after.iter().filter(|r| r.volume < min_volume).count();
+        let (small, own) = tally(&after);
         if n + 1 == count && small < small_before {
-            return Some(after);
+            return Some((after, splits));
         }
-        if n != count || small > small_before {
+        let pieces = n.saturating_sub(count);
+        if pieces > 0 && small == small_before + pieces && own == own_before + pieces {
+            splits += pieces;
+            (count, small_before, own_before) = (n, small, own);
+        } else if n != count || small > small_before {
             return None;
         }
         let vertices = vertices_of(c, &triangles);
@@ -71,7 +88,10 @@ pub(super) fn shrink(
 }
 
 /// Collapses the shortest edge of `triangles` that passes the checks of the module doc and
-/// moves no vertex of a domain wall off its wall; returns the vertex kept.
+/// moves no vertex of a domain wall off its wall; returns the vertex kept. Each edge is tried
+/// at the remesher's position, then with either end kept in place: a region pressed flat
+/// against a wall shrinks by moving its other vertices onto its wall vertices, where the
+/// midpoint would leave the wall.
 fn collapse_shortest(r: &mut Remesher, triangles: &[u32]) -> Option<u32> {
     let c = &*r.c;
     let mut edges: Vec<[u32; 2]> = triangles
@@ -89,14 +109,18 @@ fn collapse_shortest(r: &mut Remesher, triangles: &[u32]) -> Option<u32> {
         edges.into_iter().map(|e| (length(c, e), e)).collect();
     by_length.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
     for (_, [a, b]) in by_length {
-        let Some((keep, _, p)) = r.collapse_target(a, b) else {
+        let Some(first) = r.collapse_target(a, b) else {
             continue;
         };
-        if [a, b].iter().any(|&v| !stays_on_walls(r.c, v, p)) {
-            continue;
-        }
-        if r.try_collapse(a, b) {
-            return Some(keep);
+        let (pa, pb) = (r.c.position(a), r.c.position(b));
+        let ends = [(a, b, pa), (b, a, pb)].into_iter().filter(|&e| e != first);
+        for (keep, gone, p) in std::iter::once(first).chain(ends) {
+            if stays_on_walls(r.c, keep, p)
+                && stays_on_walls(r.c, gone, p)
+                && r.try_collapse_to(keep, gone, p)
+            {
+                return Some(keep);
+            }
         }
     }
     None
@@ -163,6 +187,7 @@ mod tests {
     use crate::front::intersection::self_intersections;
     use crate::front::topology::clean;
     use crate::mesh::fixtures::lattice_mesh;
+    use crate::mesh::LabeledMesh;
 
     /// Shrinks the region `is_pocket` picks in a 4³ lattice of `cells` at L = 0.8, where
     /// (L/2)³ = 0.064 makes a cell (1/64) small; checks that exactly that region went and the
@@ -171,8 +196,16 @@ mod tests {
     fn shrink_pocket(
         cells: impl Fn(usize, usize, usize) -> PhaseId,
         is_pocket: impl Fn(&Region) -> bool,
-    ) -> (Vec<Region>, Region, Vec<Region>, crate::mesh::LabeledMesh) {
-        let mut c = Connectivity::new(lattice_mesh(4, cells));
+    ) -> (Vec<Region>, Region, Vec<Region>, LabeledMesh) {
+        shrink_in(lattice_mesh(4, cells), is_pocket)
+    }
+
+    /// [`shrink_pocket`] on any fixture `mesh`.
+    fn shrink_in(
+        mesh: LabeledMesh,
+        is_pocket: impl Fn(&Region) -> bool,
+    ) -> (Vec<Region>, Region, Vec<Region>, LabeledMesh) {
+        let mut c = Connectivity::new(mesh);
         let all = regions(&c);
         let pocket = all
             .iter()
@@ -189,7 +222,8 @@ mod tests {
             min_volume,
         )
         .expect("the pocket shrinks away");
-        assert_eq!(after.len() + 1, all.len());
+        let (after, splits) = after;
+        assert_eq!(after.len() + 1, all.len() + splits);
         let mesh = clean(&c);
         crate::invariants::check(&mesh, 0.0).expect("closed and label-consistent");
         assert!(self_intersections(&mesh).is_empty());
@@ -236,8 +270,37 @@ mod tests {
             (_, _, k) => PhaseId::from(k < 2),
         };
         let (_, _, _, mesh) = shrink_pocket(cells, |r| r.phase == 2);
-        // The collapses slid wall vertices along the wall: every wall face still lies in a
-        // plane of the box, exactly.
+        // The collapses slid wall vertices along the wall.
+        assert_walls_flat(&mesh);
+    }
+
+    #[test]
+    fn flat_pocket_on_a_box_edge_shrinks_onto_its_wall_vertices() {
+        // A pocket of phase 2 in the cell (0, 0, 1), on the box edge where the walls x = 0
+        // and y = 0 meet, squashed against x = 0: the lattice plane x = 1/4 moved to
+        // x = 1e-5, so the pocket (and every cell of the first layer) is 4e-5 of a cell thick,
+        // as the flat regions a foam leaves on its walls. Its vertices on the box edge may
+        // only slide along it, an edge across the thickness cannot collapse to its midpoint
+        // (off the wall x = 0): it shrinks only with the wall end of such edges kept in place
+        // (without that, no collapse passes; the cells (0, 1, 1) and (0, 2, 2), on one wall,
+        // shrink either way).
+        let cells = |i, j, k| match (i, j, k) {
+            (0, 0, 1) => 2,
+            (_, _, k) => PhaseId::from(k < 2),
+        };
+        let mut mesh = lattice_mesh(4, cells);
+        for p in &mut mesh.vertices {
+            if p.x == 0.25 {
+                p.x = 1e-5;
+            }
+        }
+        let (_, pocket, _, after) = shrink_in(mesh, |r| r.phase == 2);
+        assert!(pocket.volume < 1e-6, "{}", pocket.volume);
+        assert_walls_flat(&after);
+    }
+
+    /// Every wall face of `mesh` lies in a plane of its bounding box, exactly.
+    fn assert_walls_flat(mesh: &LabeledMesh) {
         let lo = mesh.vertices.iter().fold(DVec3::INFINITY, |a, &b| a.min(b));
         let hi = mesh
             .vertices
