@@ -314,6 +314,24 @@ mod tests {
         assert_walls_flat(&mesh, 0.0);
     }
 
+    /// 4³ box: phase 1 below z = 1/2, a pocket of phase 2 in the cell (0, 0, 1) on the box
+    /// edge x = y = 0, with the lattice plane at 1/4 along each of `axes` moved to 1e-5.
+    fn edge_pocket(axes: &[usize]) -> LabeledMesh {
+        let cells = |i, j, k| match (i, j, k) {
+            (0, 0, 1) => 2,
+            (_, _, k) => PhaseId::from(k < 2),
+        };
+        let mut mesh = lattice_mesh(4, cells);
+        for p in &mut mesh.vertices {
+            for &a in axes {
+                if p[a] == 0.25 {
+                    p[a] = 1e-5;
+                }
+            }
+        }
+        mesh
+    }
+
     #[test]
     fn flat_pocket_on_a_box_edge_shrinks_onto_its_wall_vertices() {
         // A pocket of phase 2 in the cell (0, 0, 1), on the box edge where the walls x = 0
@@ -324,17 +342,7 @@ mod tests {
         // (off the wall x = 0): it shrinks only with the wall end of such edges kept in place
         // (without that, no collapse passes; the cells (0, 1, 1) and (0, 2, 2), on one wall,
         // shrink either way).
-        let cells = |i, j, k| match (i, j, k) {
-            (0, 0, 1) => 2,
-            (_, _, k) => PhaseId::from(k < 2),
-        };
-        let mut mesh = lattice_mesh(4, cells);
-        for p in &mut mesh.vertices {
-            if p.x == 0.25 {
-                p.x = 1e-5;
-            }
-        }
-        let (_, pocket, _, after) = shrink_in(mesh, |r| r.phase == 2);
+        let (_, pocket, _, after) = shrink_in(edge_pocket(&[0]), |r| r.phase == 2);
         assert!(pocket.volume < 1e-6, "{}", pocket.volume);
         assert_walls_flat(&after, 0.0);
     }
@@ -347,19 +355,7 @@ mod tests {
         // vertex could not move and the needle stayed. (This needle also shrinks without the
         // target on the box edge, [`onto_walls`]; the 64-cell foam at 24³ kept one of 2e-11
         // along an edge of its box without it, README "Foam".)
-        let cells = |i, j, k| match (i, j, k) {
-            (0, 0, 1) => 2,
-            (_, _, k) => PhaseId::from(k < 2),
-        };
-        let mut mesh = lattice_mesh(4, cells);
-        for p in &mut mesh.vertices {
-            if p.x == 0.25 {
-                p.x = 1e-5;
-            }
-            if p.y == 0.25 {
-                p.y = 1e-5;
-            }
-        }
+        let mut mesh = edge_pocket(&[0, 1]);
         let off = mesh
             .vertices
             .iter()
