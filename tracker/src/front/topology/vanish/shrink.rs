@@ -93,11 +93,12 @@ pub(super) fn shrink(
 }
 
 /// Collapses the shortest edge of `triangles` that passes the checks of the module doc and
-/// moves no vertex of a domain wall off its wall (within `tol`); returns the vertex kept. Each edge is tried
-/// at the remesher's position, then with either end kept in place, then at the remesher's
-/// position moved onto the walls of both ends ([`onto_walls`]): a region pressed flat against
-/// a wall shrinks by moving its other vertices onto its wall vertices, where the midpoint
-/// would leave the wall, and one along a box edge by moving its vertices onto that edge.
+/// moves no vertex of a domain wall off its wall (within `tol`); returns the vertex kept.
+/// Each edge is tried at the remesher's position, then with either end kept in place, then at
+/// the remesher's position moved onto the walls of both ends ([`onto_walls`]): a region
+/// pressed flat against a wall shrinks by moving its other vertices onto its wall vertices,
+/// where the midpoint would leave the wall, and one along a box edge by moving its vertices
+/// onto that edge.
 fn collapse_shortest(r: &mut Remesher, triangles: &[u32], tol: f64) -> Option<u32> {
     let c = &*r.c;
     let mut edges: Vec<[u32; 2]> = triangles
