@@ -223,3 +223,47 @@ fn impact_zones_slide_along_pinned_coordinates_only_when_asked() {
         }
     }
 }
+
+#[test]
+fn a_pair_held_within_the_near_miss_distance_does_not_fail_the_motion() {
+    // The 256-region foam at t = 0.038: vertex 0 on the box edge x = y = 0 (held), 5e-10 from
+    // the edge 2–3 of a wall triangle on y = 0 whose vertex 3 slides along z. The CCD reports
+    // the pair as a near miss whatever the impulses do, and the impact zone that stops it
+    // leaves it where it started; the rest of the mesh (triangle 6 7 8) must still move.
+    let x0 = vec![
+        DVec3::new(0.0, 0.0, 0.9014165969122023),
+        DVec3::new(0.009233792638306924, 0.0, 0.957884231120184),
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(7.312652915928558e-10, 0.0, 0.8547044261482681),
+        DVec3::new(0.0, 0.03, 0.95),
+        DVec3::new(0.0, 0.02, 0.88),
+        DVec3::new(0.5, 0.5, 0.5),
+        DVec3::new(0.6, 0.5, 0.5),
+        DVec3::new(0.5, 0.6, 0.5),
+    ];
+    let triangles = vec![[1, 2, 3], [0, 4, 5], [6, 7, 8]];
+    let pinned = vec![
+        [true; 3],
+        [false, true, false],
+        [true; 3],
+        [true, true, false],
+        [true, false, false],
+        [true, false, false],
+        [false; 3],
+        [false; 3],
+        [false; 3],
+    ];
+    let mut x1 = x0.clone();
+    x1[3].z += 1.8e-4;
+    for p in &mut x1[6..] {
+        *p += DVec3::splat(0.01);
+    }
+    let params = CollisionParams {
+        pinned_zones_slide: true,
+        ..CollisionParams::default()
+    };
+    let proposed = x1.clone();
+    resolve_pinned(&triangles, &x0, &mut x1, &pinned, &params).expect("resolved");
+    assert_eq!(&x1[6..], &proposed[6..]);
+    assert!(detect(&triangles, &x0, &x1).is_empty());
+}
