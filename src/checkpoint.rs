@@ -17,14 +17,14 @@ use polyphase_tracker::{ply, LabeledMesh, MdTree, TrackerSnapshot};
 pub const FILE: &str = "checkpoint.bin";
 
 const MAGIC: &[u8; 8] = b"PPHASECK";
-const VERSION: u32 = 6;
+const VERSION: u32 = 7;
 
 /// Tracker kind tags, the first byte of the tracker's part of the body.
 const CONTOUR: u8 = 0;
 const FRONT: u8 = 1;
 
 /// Counts in a [`FrontStepReport`].
-const REPORT_COUNTS: usize = 15;
+const REPORT_COUNTS: usize = 16;
 
 /// Running totals of a run (timings differ between runs; they only feed the summary).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -253,6 +253,7 @@ fn report_counts(r: &FrontStepReport) -> [usize; REPORT_COUNTS] {
         t.separations,
         t.degenerate,
         t.vanished,
+        t.needles,
     ]
 }
 
@@ -277,6 +278,7 @@ fn report_from_counts(n: [usize; REPORT_COUNTS]) -> FrontStepReport {
             separations: n[12],
             degenerate: n[13],
             vanished: n[14],
+            needles: n[15],
         },
     }
 }

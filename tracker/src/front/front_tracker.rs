@@ -618,6 +618,7 @@ impl InterfaceTracker for FrontTracker {
                 ("remesh_collapses", self.report.remesh.collapses),
                 ("remesh_flips", self.report.remesh.flips),
                 ("merge_snaps", self.report.topology.snaps),
+                ("needle_collapses", self.report.topology.needles),
                 ("t1_collapses", self.report.topology.junction_collapses),
                 ("t1_separations", self.report.topology.separations),
                 ("t2_degenerate", self.report.topology.degenerate),

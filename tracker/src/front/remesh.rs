@@ -140,6 +140,11 @@ pub(crate) struct Remesher<'a> {
     /// once and follows the pieces). Either keeps every edge's half-face balance, so the mesh
     /// stays closed and label-consistent.
     pub(crate) coincident: bool,
+    /// Collapses skip the pseudo-motion's CCD check and the caller checks their end state
+    /// with the exact intersection test instead: for needle edges, below the CCD's near-miss
+    /// distance, where every motion reads as a contact
+    /// ([`crate::front::topology::needle`]).
+    pub(crate) end_state_checked: bool,
     /// Splits move the new vertex to its butterfly point ([`FrontParams::butterfly`]).
     butterfly: bool,
     /// Collapses and ridge moves keep every phase's volume ([`improve`]).
@@ -174,6 +179,7 @@ impl<'a> Remesher<'a> {
             failsafe: false,
             junction: false,
             coincident: false,
+            end_state_checked: false,
             butterfly: false,
             keep_volumes: true,
             junction_creases: true,

@@ -13,6 +13,7 @@ use super::FrontTracker;
 use crate::front::flow::MeshFlow;
 use crate::front::topology::degenerate::remove_degenerate_pairs;
 use crate::front::topology::merge::merge_pass;
+use crate::front::topology::needle::collapse_needles;
 use crate::front::topology::separate::{
     collapse_junction_edges, separate_vertices, SeparationStrength,
 };
@@ -33,6 +34,8 @@ pub(super) enum T1Rule<'a> {
 pub struct TopologyCounts {
     /// Vertex pairs snapped together by merging.
     pub snaps: usize,
+    /// Needle edges collapsed ([`collapse_needles`]).
+    pub needles: usize,
     /// Collapses that joined two non-manifold curves (the start of a T1).
     pub junction_collapses: usize,
     /// Vertex separations (the end of a T1).
@@ -49,6 +52,7 @@ impl TopologyCounts {
     pub fn plus(&self, o: &TopologyCounts) -> TopologyCounts {
         TopologyCounts {
             snaps: self.snaps + o.snaps,
+            needles: self.needles + o.needles,
             junction_collapses: self.junction_collapses + o.junction_collapses,
             separations: self.separations + o.separations,
             degenerate: self.degenerate + o.degenerate,
@@ -77,10 +81,13 @@ impl FrontTracker {
         }
     }
 
-    /// The T1 processes of `rule`, then the T2 processes, on the improved mesh.
+    /// Needle edges collapsed, the T1 processes of `rule`, then the T2 processes, on the
+    /// improved mesh.
     pub(super) fn separate(&mut self, rule: T1Rule) -> TopologyCounts {
         let start = Instant::now();
+        let needles = collapse_needles(&mut self.c, &self.params, self.target);
         let mut counts = self.t1(rule);
+        counts.needles = needles;
         counts.degenerate += remove_degenerate_pairs(&mut self.c);
         let min_volume = self.params.min_region_volume * self.target.powi(3);
         if min_volume > 0.0 {

@@ -209,19 +209,7 @@ impl Remesher<'_> {
         if !self.bounds_allow(&old, &new) {
             return false;
         }
-        // Pseudo-motion with the vanishing triangles hidden from the check.
-        let hidden: Vec<[u32; 3]> = edge_tris.iter().map(|&t| self.c.triangle(t)).collect();
-        for &t in &edge_tris {
-            self.grid.remove(t);
-            self.c.mesh.triangles[t as usize] = DEAD;
-        }
-        let safe = self.pseudo_motion_is_safe(&[keep, gone], &[p, p], Some([keep, gone]));
-        for (&t, &tri) in edge_tris.iter().zip(&hidden) {
-            self.c.mesh.triangles[t as usize] = tri;
-            let (lo, hi) = super::tri_box(self.c, t);
-            self.grid.insert(t, lo, hi);
-        }
-        if !safe {
+        if !self.end_state_checked && !self.safe_pseudo_collapse(&edge_tris, keep, gone, p) {
             return false;
         }
         for &t in &edge_tris {
@@ -234,5 +222,22 @@ impl Remesher<'_> {
         }
         self.move_vertex(keep, p);
         true
+    }
+
+    /// Is the pseudo-motion of `keep` and `gone` to `p` collision-free, with the triangles
+    /// `edge_tris` on the edge (which vanish) hidden from the check?
+    fn safe_pseudo_collapse(&mut self, edge_tris: &[u32], keep: u32, gone: u32, p: DVec3) -> bool {
+        let hidden: Vec<[u32; 3]> = edge_tris.iter().map(|&t| self.c.triangle(t)).collect();
+        for &t in edge_tris {
+            self.grid.remove(t);
+            self.c.mesh.triangles[t as usize] = DEAD;
+        }
+        let safe = self.pseudo_motion_is_safe(&[keep, gone], &[p, p], Some([keep, gone]));
+        for (&t, &tri) in edge_tris.iter().zip(&hidden) {
+            self.c.mesh.triangles[t as usize] = tri;
+            let (lo, hi) = super::tri_box(self.c, t);
+            self.grid.insert(t, lo, hi);
+        }
+        safe
     }
 }

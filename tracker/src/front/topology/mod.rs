@@ -6,6 +6,7 @@
 
 pub mod degenerate;
 pub mod merge;
+pub mod needle;
 pub mod region_graph;
 pub mod regions;
 pub mod separate;

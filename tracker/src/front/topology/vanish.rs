@@ -23,6 +23,8 @@ use polyphase_grid::OUTSIDE;
 
 mod shrink;
 
+pub(crate) use self::shrink::{collapse_on_walls, WALL_TOLERANCE};
+
 use self::shrink::shrink;
 use super::degenerate::remove_degenerate_pairs;
 use super::regions::{regions, Region};
@@ -114,7 +116,7 @@ pub fn remove_small_regions(
 /// The number of regions of `c` given its shells' regions `all`: removing the last interface
 /// leaves one phase filling the domain, which [`regions`] (a count over boundary shells) does
 /// not see, so that is one region, a drop by one from two.
-fn region_count(c: &Connectivity, all: &[Region]) -> usize {
+pub(crate) fn region_count(c: &Connectivity, all: &[Region]) -> usize {
     if c.mesh.triangles.iter().all(|&t| t == DEAD) {
         1
     } else {

@@ -19,7 +19,7 @@ use crate::front::topology::regions::regions;
 
 /// How far from its wall a wall vertex may be, in target edge lengths: rounding only (as the
 /// contraction's plane tolerance in `vanish.rs`).
-const WALL_TOLERANCE: f64 = 1e-9;
+pub(crate) const WALL_TOLERANCE: f64 = 1e-9;
 
 /// Shrinks `region` (one of `all`, the regions of `c`; smaller than `min_volume`) by collapses
 /// of its edges until it vanishes, and returns the regions then and how many pieces it split
@@ -115,24 +115,29 @@ fn collapse_shortest(r: &mut Remesher, triangles: &[u32], tol: f64) -> Option<u3
     let mut by_length: Vec<(f64, [u32; 2])> =
         edges.into_iter().map(|e| (length(c, e), e)).collect();
     by_length.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    for (_, [a, b]) in by_length {
-        let Some(first) = r.collapse_target(a, b) else {
+    by_length
+        .into_iter()
+        .find_map(|(_, [a, b])| collapse_on_walls(r, a, b, tol))
+}
+
+/// Collapses edge `(a, b)` at the first position of [`collapse_shortest`]'s list that moves
+/// neither end off its walls (within `tol`) and that the remesher accepts; returns the vertex
+/// kept.
+pub(crate) fn collapse_on_walls(r: &mut Remesher, a: u32, b: u32, tol: f64) -> Option<u32> {
+    let first = r.collapse_target(a, b)?;
+    let (pa, pb) = (r.c.position(a), r.c.position(b));
+    let on_walls = (first.0, first.1, onto_walls(r.c, [a, b], first.2, tol));
+    let mut tried = Vec::with_capacity(4);
+    for (keep, gone, p) in [first, (a, b, pa), (b, a, pb), on_walls] {
+        if tried.contains(&(keep, gone, p)) {
             continue;
-        };
-        let (pa, pb) = (r.c.position(a), r.c.position(b));
-        let on_walls = (first.0, first.1, onto_walls(r.c, [a, b], first.2, tol));
-        let mut tried = Vec::with_capacity(4);
-        for (keep, gone, p) in [first, (a, b, pa), (b, a, pb), on_walls] {
-            if tried.contains(&(keep, gone, p)) {
-                continue;
-            }
-            tried.push((keep, gone, p));
-            if stays_on_walls(r.c, keep, p, tol)
-                && stays_on_walls(r.c, gone, p, tol)
-                && r.try_collapse_to(keep, gone, p)
-            {
-                return Some(keep);
-            }
+        }
+        tried.push((keep, gone, p));
+        if stays_on_walls(r.c, keep, p, tol)
+            && stays_on_walls(r.c, gone, p, tol)
+            && r.try_collapse_to(keep, gone, p)
+        {
+            return Some(keep);
         }
     }
     None
