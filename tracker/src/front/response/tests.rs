@@ -267,3 +267,34 @@ fn a_pair_held_within_the_near_miss_distance_does_not_fail_the_motion() {
     assert_eq!(&x1[6..], &proposed[6..]);
     assert!(detect(&triangles, &x0, &x1).is_empty());
 }
+
+#[test]
+fn a_contact_within_a_wall_is_resolved_by_impulses_along_the_wall() {
+    // Two triangles lying in the wall z = 0 (z held, as the tracker holds wall vertices), the
+    // second sliding into the first across its long edge: the contact normal is the held z,
+    // so an impulse along it moves nothing. With impact zones switched off the motion must
+    // still resolve, by impulses within the wall.
+    let x0 = vec![
+        DVec3::new(0.0, 0.0, 0.0),
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::new(0.6, 0.6, 0.0),
+        DVec3::new(1.2, 0.6, 0.0),
+        DVec3::new(0.6, 1.2, 0.0),
+    ];
+    let triangles = vec![[0, 1, 2], [3, 4, 5]];
+    let pinned = vec![[false, false, true]; 6];
+    let mut x1 = x0.clone();
+    for p in &mut x1[3..] {
+        *p -= DVec3::new(0.3, 0.3, 0.0);
+    }
+    let impulses_only = CollisionParams {
+        zone_iterations: 0,
+        ..CollisionParams::default()
+    };
+    let stats =
+        resolve_pinned(&triangles, &x0, &mut x1, &pinned, &impulses_only).expect("resolved");
+    assert!(stats.contacts > 0);
+    assert!(detect(&triangles, &x0, &x1).is_empty());
+    assert!(x1.iter().all(|p| p.z == 0.0));
+}

@@ -27,8 +27,8 @@ use crate::front::remesh::{tri_box, Remesher};
 pub const NEEDLE: f64 = 1e-6;
 
 /// Collapses the needle edges of `c`, shortest first; returns how many collapsed. Each
-/// collapse moves no wall vertex off its wall and passes the remesher's fold and CCD checks
-/// (as a fail-safe collapse, Appendix A.4).
+/// collapse moves no wall vertex off its wall, passes the remesher's fold check (as a
+/// fail-safe collapse, Appendix A.4) and leaves no intersection ([`intersects_around`]).
 pub fn collapse_needles(c: &mut Connectivity, params: &FrontParams, target: f64) -> usize {
     let limit = NEEDLE * target;
     let length = |c: &Connectivity, [a, b]: [u32; 2]| (c.position(a) - c.position(b)).length();
