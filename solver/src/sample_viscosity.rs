@@ -75,6 +75,10 @@ impl SampleViscosity {
                 }
             }
             let own = |k: PhaseId| signed(m, c, k);
+            if let Some(t) = single_phase(&m.chi, &cells[..len], h, own) {
+                // The general sum below with one term, in the same operations.
+                return (t * mu(phases, m.chi[c])) / t;
+            }
             let theta = fractions(&m.chi, &cells[..len], h, own);
             let (sum, weighted) = theta
                 .iter()
@@ -104,6 +108,10 @@ impl SampleViscosity {
                 let around = &cells[..len];
                 let mean =
                     |k: PhaseId| around.iter().map(|&c| signed(m, c, k)).sum::<f64>() / len as f64;
+                if let Some(t) = single_phase(&m.chi, around, h, mean) {
+                    let mu = mu(phases, m.chi[around[0]]);
+                    return if mu <= 0.0 { 0.0 } else { t / (t / mu) };
+                }
                 let theta = fractions(&m.chi, around, h, mean);
                 let (mut sum, mut inverse) = (0.0, 0.0);
                 for &(k, t) in theta.iter().filter(|&&(_, t)| t > 0.0) {
@@ -136,6 +144,24 @@ fn signed(m: &CellMaterial, c: usize, k: PhaseId) -> f64 {
     } else {
         m.phi[c]
     }
+}
+
+/// The fraction of the one phase of `cells` when they all hold the same one and it gets a
+/// positive fraction (as [`fractions`] would give it); None otherwise. The common case away
+/// from interfaces, without the general bookkeeping.
+#[inline]
+fn single_phase(
+    chi: &[PhaseId],
+    cells: &[usize],
+    h: f64,
+    psi: impl Fn(PhaseId) -> f64,
+) -> Option<f64> {
+    let k = chi[cells[0]];
+    if cells.iter().any(|&c| chi[c] != k) {
+        return None;
+    }
+    let t = (0.5 - psi(k) / h).clamp(0.0, 1.0);
+    (t > 0.0).then_some(t)
 }
 
 /// (phase, fraction) of each distinct phase among `cells`, the fraction from the phase's
