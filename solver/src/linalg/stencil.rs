@@ -238,8 +238,9 @@ pub(crate) fn first_axes(a: usize) -> [usize; 3] {
     }
 }
 
-/// Side of the square tiles [`transpose`] moves: a tile's source rows and destination rows
-/// both stay in the cache, however far apart consecutive rows lie.
+/// Width of the bands [`transpose`] moves at a time: each source row gives a band its
+/// consecutive values and each of the band's destination rows fills in order, so both sides
+/// stay in the cache however far apart consecutive rows lie.
 const TILE: usize = 16;
 
 /// `dst` = `src` (values on a box of `dims`) renumbered with axis `a` first: p moves to
@@ -278,7 +279,8 @@ fn convert<S: Real, D: Real>(src: &[S], dst: &mut [D]) {
 }
 
 /// Transposes each `rows` × `cols` matrix stacked in `src` (row-major, entry (r, c) at
-/// r·cols + c) into `dst` (entry (r, c) at c·rows + r), tile by tile, converting values.
+/// r·cols + c) into `dst` (entry (r, c) at c·rows + r), a band of [`TILE`] columns at a
+/// time, converting values.
 fn transpose<S: Real, D: Real>(src: &[S], dst: &mut [D], rows: usize, cols: usize) {
     let size = rows * cols;
     if size == 0 {
@@ -300,12 +302,10 @@ fn transpose<S: Real, D: Real>(src: &[S], dst: &mut [D], rows: usize, cols: usiz
         let s = &src[m * size..(m + 1) * size];
         let c0 = b * TILE;
         let width = TILE.min(cols - c0);
-        for r0 in (0..rows).step_by(TILE) {
-            for r in r0..(r0 + TILE).min(rows) {
-                let line = &s[r * cols + c0..r * cols + c0 + width];
-                for (dc, v) in line.iter().enumerate() {
-                    out[dc * rows + r] = D::from_f64(v.to_f64());
-                }
+        for r in 0..rows {
+            let line = &s[r * cols + c0..r * cols + c0 + width];
+            for (dc, v) in line.iter().enumerate() {
+                out[dc * rows + r] = D::from_f64(v.to_f64());
             }
         }
     });
@@ -329,8 +329,8 @@ mod tests {
 
     #[test]
     fn rotation_moves_every_value_to_its_renumbered_place_across_tiles() {
-        // Sides of one full tile plus a partial one (and a single layer), so whole tiles,
-        // edge tiles and stacked matrices are all exercised.
+        // Sides of one full band plus a partial one (and several layers), so whole bands,
+        // a narrower last band and stacked matrices are all exercised.
         let dims = [TILE + 5, 2 * TILE + 3, 7];
         let n = dims[0] * dims[1] * dims[2];
         let x: Vec<f64> = (0..n).map(|c| c as f64).collect();
