@@ -146,6 +146,13 @@ fn signed(m: &CellMaterial, c: usize, k: PhaseId) -> f64 {
     }
 }
 
+/// Fraction of a control volume of width `h` held by a phase whose signed distance at its
+/// centre is `psi` (see the module doc).
+#[inline]
+fn fraction(psi: f64, h: f64) -> f64 {
+    (0.5 - psi / h).clamp(0.0, 1.0)
+}
+
 /// The fraction of the one phase of `cells` when they all hold the same one and it gets a
 /// positive fraction (as [`fractions`] would give it); None otherwise. The common case away
 /// from interfaces, without the general bookkeeping.
@@ -160,7 +167,7 @@ fn single_phase(
     if cells.iter().any(|&c| chi[c] != k) {
         return None;
     }
-    let t = (0.5 - psi(k) / h).clamp(0.0, 1.0);
+    let t = fraction(psi(k), h);
     (t > 0.0).then_some(t)
 }
 
@@ -175,7 +182,7 @@ fn fractions(chi: &[PhaseId], cells: &[usize], h: f64, psi: impl Fn(PhaseId) -> 
     for &c in cells {
         let k = chi[c];
         if !out.items[..out.len].iter().any(|&(q, _)| q == k) {
-            out.items[out.len] = (k, (0.5 - psi(k) / h).clamp(0.0, 1.0));
+            out.items[out.len] = (k, fraction(psi(k), h));
             out.len += 1;
         }
     }
