@@ -135,6 +135,14 @@ impl<T: Real> Stencil7<T> {
     /// Adds the y and z couplings of x-row `row` (fixed j, k) to `acc`: the part of A·x that
     /// comes from other rows.
     pub fn cross_row(&self, row: usize, x: &[T], acc: &mut [T]) {
+        let nx = self.dims[0];
+        self.cross_row_from(row, |r| &x[r * nx..(r + 1) * nx], acc);
+    }
+
+    /// [`Stencil7::cross_row`] with the other rows' values from `rows` (row index to its
+    /// values), so that a sweep may read rows of one colour while it writes the others.
+    #[inline]
+    pub fn cross_row_from<'x>(&self, row: usize, rows: impl Fn(usize) -> &'x [T], acc: &mut [T]) {
         let [nx, ny, nz] = self.dims;
         let (j, k) = (row % ny, row / ny);
         let base = row * nx;
@@ -163,7 +171,7 @@ impl<T: Real> Stencil7<T> {
         for (n, (d, other)) in neighbour_rows.into_iter().enumerate() {
             let Some(other) = other else { continue };
             let ob = other * nx;
-            let xo = &x[ob..ob + nx];
+            let xo = rows(other);
             // Upward couplings are stored on this row, downward ones on the other row.
             let coupling = if n % 2 == 0 {
                 &self.off[d][base..base + nx]
