@@ -605,42 +605,49 @@ fn wall_volume(walls: Option<(Wall, Wall)>, low: bool) -> f64 {
     }
 }
 
-/// z-planes per task of the operator: all three components of a slab are computed together,
-/// so the planes of x and of the weights that their stencils share are read from cache (about
-/// 1.5 MB for a plane at 128³, within one core's 2 MB). One operator product on the viscosity
-/// bench (128³, fastest of 25): 0.050–0.053 s one component after the other; by slabs of 1,
-/// 2, 4, 8 planes 0.041–0.042, 0.042, 0.042–0.045, 0.045–0.050 s.
-const SLAB_PLANES: usize = 1;
+/// Rows (along y) of one z-plane per task of the operator: all three components of such a
+/// band are computed together, so the rows of x and of the weights that their stencils share
+/// are read from cache, and a slab scene (two cells deep) still has tasks for many threads.
+/// One operator product on the viscosity bench (128³, fastest of 25): 0.050–0.053 s one
+/// component after the other over the whole box; by whole z-planes (about 1.5 MB of data
+/// each, within one core's 2 MB cache) 0.041–0.042 s, by 2, 4, 8 planes 0.042, 0.042–0.045,
+/// 0.045–0.050 s; by bands of 16, 32, 64 rows 0.040, 0.039–0.040, 0.040–0.041 s.
+const BAND_ROWS: usize = 32;
 
 impl LinearOperator for ViscousSystem<'_> {
     fn apply(&self, x: &[f64], y: &mut [f64]) {
         // CG's vectors keep zeros on fixed faces, which the fast rows rely on; other inputs
         // take the general path everywhere.
         let fast = self.fixed_faces_zero(x);
-        // Each component's rows cut at the same z-planes (the z faces' extra plane goes with
-        // the last slab).
-        let nz = self.layout.n[2];
-        let slabs = nz.div_ceil(SLAB_PLANES);
-        let mut parts: Vec<[(usize, &mut [f64]); 3]> = Vec::with_capacity(slabs);
+        // Each component's rows cut at the same (z-plane, y-row) places: a band ends at row
+        // `j_end` of plane k, the last band of a plane takes the y faces' extra row, the last
+        // band of all the z faces' extra plane.
+        let [_, ny, nz] = self.layout.n;
+        let bands = ny.div_ceil(BAND_ROWS);
+        let mut parts: Vec<[(usize, &mut [f64]); 3]> = Vec::with_capacity(bands * nz);
         let (y0, tail) = y.split_at_mut(self.offsets[1]);
         let (y1, y2) = tail.split_at_mut(self.offsets[2] - self.offsets[1]);
         let (mut rest, mut first) = ([y0, y1, y2], [0; 3]);
-        for slab in 0..slabs {
-            let end = if slab + 1 == slabs {
-                usize::MAX
-            } else {
-                (slab + 1) * SLAB_PLANES
-            };
-            let part = [0, 1, 2].map(|a| {
-                let fd = self.fdims[a];
-                let rows = (end.min(fd[2]) * fd[1]).saturating_sub(first[a]);
-                let (head, tail) = std::mem::take(&mut rest[a]).split_at_mut(rows * fd[0]);
-                rest[a] = tail;
-                let start = first[a];
-                first[a] += rows;
-                (start, head)
-            });
-            parts.push(part);
+        for k in 0..nz {
+            for band in 0..bands {
+                let part = [0, 1, 2].map(|a| {
+                    let fd = self.fdims[a];
+                    let end = if k + 1 == nz && band + 1 == bands {
+                        fd[1] * fd[2]
+                    } else if band + 1 == bands {
+                        (k + 1) * fd[1]
+                    } else {
+                        k * fd[1] + (band + 1) * BAND_ROWS
+                    };
+                    let rows = end - first[a];
+                    let (head, tail) = std::mem::take(&mut rest[a]).split_at_mut(rows * fd[0]);
+                    rest[a] = tail;
+                    let start = first[a];
+                    first[a] = end;
+                    (start, head)
+                });
+                parts.push(part);
+            }
         }
         parts.into_par_iter().for_each(|part| {
             for (a, (first_row, out)) in part.into_iter().enumerate() {
@@ -774,8 +781,13 @@ mod tests {
     /// Small mixed-boundary system: x periodic, y no-slip (moving lid), z free-slip, a closed
     /// interior face, viscosity varying per cell.
     fn with_system(check: impl Fn(&ViscousSystem<'_>)) {
+        with_system_on([3, 4, 3], check);
+    }
+
+    /// [`with_system`] on a box of `n` cells.
+    fn with_system_on(n: [usize; 3], check: impl Fn(&ViscousSystem<'_>)) {
         let layout = Layout {
-            n: [3, 4, 3],
+            n,
             periodic: [true, false, false],
         };
         let boundaries = [
@@ -848,6 +860,42 @@ mod tests {
                         (cj[i] - ci[j]).abs() < 1e-12 * (1.0 + ci[i].abs()),
                         "({i},{j})"
                     );
+                }
+            }
+        });
+    }
+
+    /// The operator, computed by bands of rows across the three components, equals every
+    /// face's row computed on its own by the general path, on a box more than two bands deep
+    /// and with and without the fast rows (x zero on the fixed faces or not).
+    #[test]
+    fn banded_operator_matches_the_face_by_face_rows() {
+        with_system_on([4, 2 * BAND_ROWS + 3, 3], |sys| {
+            let n = sys.len();
+            let mut x: Vec<f64> = (0..n).map(|i| ((i * 7) % 13) as f64 - 6.0).collect();
+            for zero_fixed in [false, true] {
+                if zero_fixed {
+                    sys.fixed.iter().for_each(|&j| x[j] = 0.0);
+                }
+                let mut y = vec![0.0; n];
+                sys.apply(&x, &mut y);
+                for a in 0..3 {
+                    let (o, xa) = (sys.offsets, &x[sys.offsets[a]..sys.offsets[a + 1]]);
+                    let mut want = vec![0.0; o[a + 1] - o[a]];
+                    sys.divergence_rows(&x, a, false, false, &mut want, |f, d| {
+                        if sys.open[a][f] > 0.0 {
+                            sys.rho_face[a][f] * xa[f] + sys.dt * d
+                        } else {
+                            xa[f]
+                        }
+                    });
+                    for (f, (got, want)) in y[o[a]..o[a + 1]].iter().zip(&want).enumerate() {
+                        // The fast rows sum the same products in another order.
+                        assert!(
+                            (got - want).abs() < 1e-12 * (1.0 + want.abs()),
+                            "component {a}, face {f}: {got} vs {want}"
+                        );
+                    }
                 }
             }
         });
