@@ -617,15 +617,19 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn line_smoothed_multigrid_is_symmetric_positive_definite() {
-        // Rows two-coloured (swept in place), and a periodic axis of odd length across them,
-        // whose wrap joins rows of one colour (swept from a copy).
-        for a in [
+    /// Rows two-coloured (swept in place), and periodic axes of odd length across them, whose
+    /// wrap joins rows of one colour (swept from a copy).
+    fn line_cases() -> [Stencil7; 3] {
+        [
             anisotropic(),
             anisotropic_on([6, 5, 4], [true, true, false]),
             anisotropic_on([5, 4, 3], [false, false, true]),
-        ] {
+        ]
+    }
+
+    #[test]
+    fn line_smoothed_multigrid_is_symmetric_positive_definite() {
+        for a in line_cases() {
             check_spd(&a);
         }
     }
@@ -635,11 +639,7 @@ mod tests {
     /// previous iterate on the other rows.
     #[test]
     fn a_line_half_sweep_solves_its_rows_given_the_others() {
-        for a in [
-            anisotropic(),
-            anisotropic_on([6, 5, 4], [true, true, false]),
-            anisotropic_on([5, 4, 3], [false, false, true]),
-        ] {
+        for a in line_cases() {
             let n = a.len();
             let nx = a.dims[0];
             let ny = a.dims[1];
