@@ -314,7 +314,7 @@ impl<'a> ViscousSystem<'a> {
     /// `out[f] = finish(f, d)` for the faces f of component `a`, d = (Dᵀ W (D x [+ wall
     /// terms])) at f (not read for fixed faces), every stress computed on the spot; with
     /// `skip_fast` the faces of [`ViscousSystem::fast_span`] are left to
-    /// [`ViscousSystem::apply_fast`].
+    /// [`ViscousSystem::fast_row`].
     fn divergence_rows(
         &self,
         x: &[f64],
@@ -367,9 +367,10 @@ impl<'a> ViscousSystem<'a> {
         }
     }
 
-    /// Operator rows y = ρ x + dt·Dᵀ W D x of the faces of [`ViscousSystem::fast_span`] of
-    /// component `a`, for an `x` that is zero on fixed faces: every neighbour at a fixed
-    /// offset, so each row is straight slices the compiler can vectorise.
+    /// Operator values y = ρ x + dt·Dᵀ W D x of x-row `row`'s faces in
+    /// [`ViscousSystem::fast_span`] of component `a`, for an `x` that is zero on fixed faces:
+    /// every neighbour at a fixed offset, so the row is straight slices the compiler can
+    /// vectorise.
     fn fast_row(&self, x: &[f64], a: usize, row: usize, o: &mut [f64]) {
         let l = self.layout;
         let fd = self.fdims[a];

@@ -29,7 +29,8 @@ const COARSE_SCALE: f64 = 0.5;
 /// Minimum x-rows per rayon task: keeps the small levels from drowning in task overhead.
 const ROWS_PER_TASK: usize = 32;
 /// Rows of a line sweep solved side by side (see [`solve_rows`]): on the viscosity bench (128³)
-/// a V-cycle takes 0.092 s with 4, 0.106 s with 8 and 0.098 s with 2.
+/// a preconditioner application (three blocks' V-cycles) takes 0.090–0.095 s with 4,
+/// 0.104–0.108 s with 8 and 0.097–0.103 s with 2.
 const LINE_GROUP: usize = 4;
 
 /// Work vectors of one level: iterate, scratch (empty where line sweeps run in place),
