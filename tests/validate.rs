@@ -158,6 +158,24 @@ tolerance = 0.05
     assert!(!o.status.success(), "{out}");
     assert!(out.contains("FAIL: passes, remove known_gap"), "{out}");
 
+    // A gap of the quick version alone (`quick_known_gap`): the failing quick run lists it as
+    // a known gap and the command succeeds.
+    fs::write(
+        case.join("case.toml"),
+        text.replace(
+            "tolerance = 0.05",
+            "tolerance = 0.05\nquick_known_gap = \"made up\"",
+        ),
+    )
+    .unwrap();
+    let o = validate_quick(&dir, &case);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{out}");
+    assert!(
+        out.contains("known gap") && out.contains("made up"),
+        "{out}"
+    );
+
     // First-step metrics measure the contouring tracker (paper 004 Table 2): a case that asks
     // for the front tracker is refused by name, before anything runs.
     let first = dir.join("front_first_step");

@@ -81,7 +81,7 @@ impl FirstStep {
                 "{}³, first step from the exact shapes",
                 self.resolution
             )),
-            known_gap: spec.known_gap.clone(),
+            known_gap: spec.gap(quick),
         })
     }
 }

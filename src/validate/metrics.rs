@@ -324,7 +324,7 @@ pub fn evaluate(
         pass: pass && ours.is_finite(),
         plot,
         note,
-        known_gap: spec.known_gap.clone(),
+        known_gap: spec.gap(quick),
     })
 }
 
