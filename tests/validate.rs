@@ -145,32 +145,27 @@ tolerance = 0.05
     // A known gap that passes fails the command until its `known_gap` line goes: the same case
     // with a tolerance of 1000 % passes.
     let text = fs::read_to_string(case.join("case.toml")).unwrap();
-    fs::write(
-        case.join("case.toml"),
-        text.replace(
-            "tolerance = 0.05",
-            "tolerance = 10.0\nknown_gap = \"made up\"",
-        ),
-    )
-    .unwrap();
-    let o = validate_quick(&dir, &case);
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(!o.status.success(), "{out}");
+    // The case with its tolerance line replaced, validated in its quick version: the table.
+    let with_tolerance = |line: &str| {
+        fs::write(
+            case.join("case.toml"),
+            text.replace("tolerance = 0.05", line),
+        )
+        .unwrap();
+        let o = validate_quick(&dir, &case);
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+        )
+    };
+    let (ok, out) = with_tolerance("tolerance = 10.0\nknown_gap = \"made up\"");
+    assert!(!ok, "{out}");
     assert!(out.contains("FAIL: passes, remove known_gap"), "{out}");
 
     // A gap of the quick version alone (`quick_known_gap`): the failing quick run lists it as
     // a known gap and the command succeeds.
-    fs::write(
-        case.join("case.toml"),
-        text.replace(
-            "tolerance = 0.05",
-            "tolerance = 0.05\nquick_known_gap = \"made up\"",
-        ),
-    )
-    .unwrap();
-    let o = validate_quick(&dir, &case);
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{out}");
+    let (ok, out) = with_tolerance("tolerance = 0.05\nquick_known_gap = \"made up\"");
+    assert!(ok, "{out}");
     assert!(
         out.contains("known gap") && out.contains("made up"),
         "{out}"

@@ -114,6 +114,15 @@ pub struct MetricSpec {
 }
 
 impl MetricSpec {
+    /// The tolerance of this run: `quick_tolerance` under `--quick` where the case has one,
+    /// else `tolerance`.
+    pub fn tolerance_for(&self, quick: bool) -> f64 {
+        match (quick, self.quick_tolerance) {
+            (true, Some(t)) => t,
+            _ => self.tolerance,
+        }
+    }
+
     /// The known gap of this run: `quick_known_gap` under `--quick` where the case has one,
     /// else `known_gap`.
     pub fn gap(&self, quick: bool) -> Option<String> {

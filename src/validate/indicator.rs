@@ -54,10 +54,7 @@ impl FirstStep {
                     spec.name, self.resolution
                 )
             })?;
-        let tolerance = match (quick, spec.quick_tolerance) {
-            (true, Some(t)) => t,
-            _ => spec.tolerance,
-        };
+        let tolerance = spec.tolerance_for(quick);
         let (ours, reference, error) = match spec.kind.as_str() {
             "indicator_accuracy" => {
                 let ours = 100.0 * self.row.indicator_accuracy;

@@ -78,10 +78,7 @@ pub fn evaluate(
     quick: bool,
 ) -> Result<Outcome> {
     ensure!(frames.len() >= 2, "the run wrote fewer than two frames");
-    let tolerance = match (quick, spec.quick_tolerance) {
-        (true, Some(t)) => t,
-        _ => spec.tolerance,
-    };
+    let tolerance = spec.tolerance_for(quick);
     let key = || {
         spec.key
             .as_deref()
